@@ -1,0 +1,51 @@
+# One entry point for a fresh machine: `make console` and `make test` set up
+# everything they need (system packages, the virtualenv, npm packages) first.
+
+PYTHON ?= python3
+VENV := .venv
+PY := $(VENV)/bin/python
+APT_PACKAGES := gcc-multilib
+MPY_NODE := tests/micropython/node_modules/@micropython/micropython-webassembly-pyscript
+
+.PHONY: setup system-packages test test-fast lint console bench
+
+setup: $(VENV)/.installed $(MPY_NODE)
+
+system-packages:
+	@missing=""; for p in $(APT_PACKAGES); do dpkg -s $$p >/dev/null 2>&1 || missing="$$missing $$p"; done; \
+	if [ -n "$$missing" ]; then \
+		echo "installing system packages:$$missing"; \
+		SUDO=$$( [ "$$(id -u)" = 0 ] || echo sudo ); \
+		$$SUDO apt-get update -qq && DEBIAN_FRONTEND=noninteractive $$SUDO apt-get install -y -qq $$missing >/dev/null; \
+	fi
+
+$(VENV)/.installed: pyproject.toml setup.py | system-packages
+	$(PYTHON) -m venv $(VENV)
+	$(PY) -m pip install -q --upgrade pip
+	$(PY) -m pip install -q -e '.[dev,sim]'
+	touch $@
+
+$(MPY_NODE): tests/micropython/package.json tests/micropython/package-lock.json
+	cd tests/micropython && npm ci --no-audit --no-fund --loglevel=error
+	touch $@
+
+lint: setup
+	$(VENV)/bin/ruff check .
+	$(VENV)/bin/lint-imports
+
+# Rebuild the C extension in place (after editing firmware/native), then run everything.
+# One pytest run: fast unit tests first, the e2e-marked ones last (tests/conftest.py orders them).
+test: setup lint
+	$(PY) setup.py -q build_ext --inplace
+	$(PY) -m pytest
+
+test-fast: setup
+	$(PY) setup.py -q build_ext --inplace
+	$(PY) -m pytest -m "not e2e" -q
+
+console: setup
+	$(VENV)/bin/openbricks --help
+
+bench: setup
+	$(PY) setup.py -q build_ext --inplace
+	$(PY) -m benchmarks

@@ -1,0 +1,20 @@
+/*
+ * The host binding is one extension module, openbricks_native, assembled from
+ * one source file per core. Each file adds its types and functions to the
+ * module; module.c only calls them in order.
+ */
+#ifndef OB_PY_BINDINGS_H
+#define OB_PY_BINDINGS_H
+
+#define PY_SSIZE_T_CLEAN
+#include <Python.h>
+
+int ob_py_add_trajectory(PyObject *module);
+int ob_py_add_observer(PyObject *module);
+int ob_py_add_scheduler(PyObject *module);
+int ob_py_add_servo(PyObject *module);
+int ob_py_add_drivebase(PyObject *module);
+int ob_py_add_scs(PyObject *module);
+int ob_py_add_imu_yaw(PyObject *module);
+
+#endif /* OB_PY_BINDINGS_H */

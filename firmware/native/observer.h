@@ -1,0 +1,28 @@
+/*
+ * Two-state alpha-beta estimator of position and speed from a quantised angle
+ * reading: a large variance reduction over finite differences for little code
+ * (pbio observer.c is a model-based big brother).
+ */
+#ifndef OB_OBSERVER_H
+#define OB_OBSERVER_H
+
+typedef struct {
+    float x_deg;   /* estimated position */
+    float v_dps;   /* estimated speed */
+    float alpha;   /* position correction gain, 0..1 */
+    float beta;    /* speed correction gain, 0..1 (scaled by 1/dt internally) */
+} ob_observer_t;
+
+/* Default gains tuned for a 4096-count encoder sampled at 1 kHz. */
+void ob_observer_init(ob_observer_t *ob, float alpha, float beta);
+
+/* Snap the estimate to x_deg at rest (after reset_angle, at construction). */
+void ob_observer_reset(ob_observer_t *ob, float x_deg);
+
+/* Predict over dt_s, then correct with a fresh reading. */
+void ob_observer_update(ob_observer_t *ob, float measured_deg, float dt_s);
+
+/* Predict over dt_s with no reading (feedback went silent this tick). */
+void ob_observer_predict(ob_observer_t *ob, float dt_s);
+
+#endif /* OB_OBSERVER_H */

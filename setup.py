@@ -1,0 +1,36 @@
+"""Maps the source folders onto the installed package names and builds the host
+extension of the C control cores; everything else is in pyproject.toml.
+
+Installed import names all start with `openbricks`, while the tree keeps the
+short folder names of the product layout (server/, sim/).
+"""
+
+from glob import glob
+
+from setuptools import Extension, find_packages, setup
+
+PACKAGE_FOLDERS = {"openbricks": "openbricks", "openbricks_server": "server", "openbricks_sim": "sim"}
+NATIVE = "firmware/native"
+
+
+def packages() -> list[str]:
+    names = []
+    for name, folder in PACKAGE_FOLDERS.items():
+        names.append(name)
+        names.extend(f"{name}.{sub}" for sub in find_packages(folder))
+    return names
+
+
+setup(
+    packages=packages(),
+    package_dir=PACKAGE_FOLDERS,
+    ext_modules=[
+        Extension(
+            "openbricks_native",
+            sources=sorted(glob(f"{NATIVE}/*.c")) + sorted(glob(f"{NATIVE}/bindings/cpython/*.c")),
+            include_dirs=[NATIVE, f"{NATIVE}/bindings/cpython"],
+            depends=sorted(glob(f"{NATIVE}/*.h")) + sorted(glob(f"{NATIVE}/bindings/cpython/*.h")),
+            extra_compile_args=["-O2", "-std=gnu99", "-Wall", "-Wextra", "-Wno-missing-field-initializers"],
+        )
+    ],
+)

@@ -1,0 +1,1 @@
+"""openbricks_sim: MuJoCo worlds, the driver shim and virtual hubs that run hub programs unchanged."""
