@@ -8,7 +8,10 @@ import openbricks
 
 def test_console_script_reports_the_runtime_version():
     out = subprocess.run(
-        [sys.executable, "-m", "openbricks_server.cli", "--version"], capture_output=True, text=True, check=True
+        [sys.executable, "-m", "openbricks_server.cli", "--version"],
+        capture_output=True,
+        text=True,
+        check=True,
     )
     assert out.stdout.strip() == f"openbricks {openbricks.__version__}"
 

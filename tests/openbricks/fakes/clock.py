@@ -1,0 +1,154 @@
+"""Virtual time for the hub runtime's tests.
+
+Installed as the `time` functions the runtime uses (MicroPython's sleep_ms and
+ticks_*), so a test that "waits" 5 s takes microseconds, and the periodic
+machine.Timer callbacks (the control tick, the log pump, the button watcher)
+fire at their due times while the program under test sleeps, as on a hub.
+"""
+
+try:
+    import utime as _host_time  # MicroPython
+except ImportError:
+    import time as _host_time
+
+TICKS_PERIOD = 1 << 30
+TICKS_MAX = TICKS_PERIOD - 1
+TICKS_HALFPERIOD = TICKS_PERIOD // 2
+
+# Unix epoch of the moment virtual time started (set by the fake RTC).
+EPOCH_2000_S = 946684800
+
+_state = {"now_us": 0, "epoch_base_us": EPOCH_2000_S * 1_000_000, "in_advance": False}
+_timers = []  # objects with .next_due_us and .fire(); machine.Timer registers here
+
+
+def reset():
+    _state["now_us"] = 0
+    _state["epoch_base_us"] = EPOCH_2000_S * 1_000_000
+    _state["in_advance"] = False
+    del _timers[:]
+
+
+def now_us():
+    return _state["now_us"]
+
+
+def register_timer(timer):
+    if timer not in _timers:
+        _timers.append(timer)
+
+
+def unregister_timer(timer):
+    if timer in _timers:
+        _timers.remove(timer)
+
+
+def advance_us(us):
+    """Move virtual time forward by `us`, firing every timer callback that falls due on the way."""
+    target = _state["now_us"] + int(us)
+    if _state["in_advance"]:
+        # A timer callback that sleeps must not recurse into the timer queue.
+        _state["now_us"] = max(_state["now_us"], target)
+        return
+    _state["in_advance"] = True
+    try:
+        while True:
+            due = [t for t in _timers if t.next_due_us is not None and t.next_due_us <= target]
+            if not due:
+                break
+            first = min(due, key=lambda t: t.next_due_us)
+            if first.next_due_us > _state["now_us"]:
+                _state["now_us"] = first.next_due_us
+            first.fire()
+        _state["now_us"] = max(_state["now_us"], target)
+    finally:
+        _state["in_advance"] = False
+
+
+def set_epoch_ms(epoch_ms):
+    """Make the wall clock read `epoch_ms` (Unix epoch milliseconds) right now."""
+    _state["epoch_base_us"] = int(epoch_ms) * 1000 - _state["now_us"]
+
+
+def epoch_us():
+    return _state["epoch_base_us"] + _state["now_us"]
+
+
+# --- the MicroPython `time` surface -------------------------------------------------
+
+
+def ticks_us():
+    return _state["now_us"] & TICKS_MAX
+
+
+def ticks_ms():
+    return (_state["now_us"] // 1000) & TICKS_MAX
+
+
+def ticks_cpu():
+    return ticks_us()
+
+
+def ticks_add(ticks, delta):
+    return (ticks + delta) & TICKS_MAX
+
+
+def ticks_diff(end, start):
+    return ((end - start + TICKS_HALFPERIOD) & TICKS_MAX) - TICKS_HALFPERIOD
+
+
+def sleep_us(us):
+    if us > 0:
+        advance_us(us)
+
+
+def sleep_ms(ms):
+    if ms > 0:
+        advance_us(int(ms * 1000))
+
+
+def sleep(seconds):
+    if seconds > 0:
+        advance_us(int(seconds * 1_000_000))
+
+
+def time():
+    return epoch_us() // 1_000_000
+
+
+def time_ns():
+    return epoch_us() * 1000
+
+
+def gmtime(secs=None):
+    return _host_time.gmtime(time() if secs is None else secs)
+
+
+def localtime(secs=None):
+    return gmtime(secs)
+
+
+def mktime(tup):
+    return _host_time.mktime(tup)
+
+
+MICROPYTHON_TIME_NAMES = (
+    "ticks_us",
+    "ticks_ms",
+    "ticks_cpu",
+    "ticks_add",
+    "ticks_diff",
+    "sleep_us",
+    "sleep_ms",
+    "sleep",
+    "time",
+    "time_ns",
+    "gmtime",
+    "localtime",
+    "mktime",
+)
+
+
+def __getattr__(name):
+    # Everything the runtime does not use (perf_counter, strftime, ...) stays the host's.
+    return getattr(_host_time, name)

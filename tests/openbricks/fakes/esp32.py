@@ -1,0 +1,40 @@
+"""A fake `esp32` module: NVS namespaces that survive a simulated reboot within one test."""
+
+_store = {}  # namespace -> {key: value}; committed values only
+
+
+def reset():
+    _store.clear()
+
+
+class NVS:
+    def __init__(self, namespace):
+        self._namespace = namespace
+        self._pending = dict(_store.get(namespace, {}))
+
+    def _get(self, key):
+        committed = _store.get(self._namespace, {})
+        if key not in committed:
+            raise OSError(-4354)  # ESP_ERR_NVS_NOT_FOUND, as the port raises it
+        return committed[key]
+
+    def set_i32(self, key, value):
+        self._pending[key] = int(value)
+
+    def get_i32(self, key):
+        return self._get(key)
+
+    def set_blob(self, key, value):
+        self._pending[key] = bytes(value)
+
+    def get_blob(self, key, buffer):
+        value = self._get(key)
+        buffer[: len(value)] = value
+        return len(value)
+
+    def erase_key(self, key):
+        self._get(key)
+        self._pending.pop(key, None)
+
+    def commit(self):
+        _store[self._namespace] = dict(self._pending)

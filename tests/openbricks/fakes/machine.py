@@ -1,0 +1,439 @@
+"""A fake `machine` module at the level the drivers touch: pins, ADC, PWM,
+timers, the RTC and the UART / I2C / SPI buses.
+
+Buses carry bytes to device models that tests attach (a fake ST3215 that
+answers SCS packets from a register file, I2C chips with register maps), so
+drivers are exercised through their real wire protocol. `board` is the
+test's handle on the outside world: input levels, analog voltages, pulse
+widths, and what the runtime drove.
+"""
+
+from . import clock
+
+
+class _Board:
+    """Everything outside the chip, as the test sets it up and reads it back."""
+
+    def __init__(self):
+        self.reset()
+
+    def reset(self):
+        self.input_levels = {}  # pin id -> 0/1 seen by Pin.value() on inputs
+        self.analog = {}  # pin id -> raw 12-bit ADC reading
+        self.pins = {}  # pin id -> the last Pin object constructed for it
+        self.pwms = {}  # pin id -> the last PWM object constructed for it
+        self.uart_devices = {}  # uart id -> device with .handle(bytes) -> bytes
+        self.uarts = {}  # uart id -> the last UART object constructed for it
+        self.i2c_devices = {}  # bus id -> {address: device}
+        self.spi_devices = {}  # cs pin id -> device with .transfer(bytes) -> bytes
+        self.pulses_us = {}  # echo pin id -> pulse width time_pulse_us() returns (-1/-2 on timeout)
+        self.bitstreams = []  # (pin id, timing, bytes) written by machine.bitstream
+        self.rtc_datetime = None
+        self.resets = 0
+
+    def set_input(self, pin_id, level):
+        """Drive an input pin from outside; fires the pin's IRQ on a matching edge."""
+        old = self.input_levels.get(pin_id, 1)
+        self.input_levels[pin_id] = 1 if level else 0
+        pin = self.pins.get(pin_id)
+        if pin is not None and pin._irq_handler is not None and old != self.input_levels[pin_id]:
+            rising = self.input_levels[pin_id] == 1
+            if (rising and pin._irq_trigger & Pin.IRQ_RISING) or (
+                not rising and pin._irq_trigger & Pin.IRQ_FALLING
+            ):
+                pin._irq_handler(pin)
+
+    def attach_uart(self, uart_id, device):
+        self.uart_devices[uart_id] = device
+
+    def attach_i2c(self, bus_id, address, device):
+        self.i2c_devices.setdefault(bus_id, {})[address] = device
+
+    def attach_spi(self, cs_pin_id, device):
+        self.spi_devices[cs_pin_id] = device
+
+
+board = _Board()
+
+
+def _pin_id(pin):
+    return pin.id() if isinstance(pin, Pin) else pin
+
+
+class Pin:
+    IN = 1
+    OUT = 3
+    OPEN_DRAIN = 7
+    PULL_UP = 1
+    PULL_DOWN = 2
+    IRQ_RISING = 1
+    IRQ_FALLING = 2
+
+    def __init__(self, id, mode=-1, pull=-1, value=None):
+        self._id = id
+        self._mode = mode
+        self._pull = pull
+        self._out = 0
+        self._irq_handler = None
+        self._irq_trigger = 0
+        if value is not None:
+            self._out = 1 if value else 0
+        board.pins[id] = self
+
+    def init(self, mode=-1, pull=-1, value=None):
+        if mode != -1:
+            self._mode = mode
+        if pull != -1:
+            self._pull = pull
+        if value is not None:
+            self._out = 1 if value else 0
+
+    def id(self):
+        return self._id
+
+    def value(self, v=None):
+        if v is None:
+            if self._mode == Pin.OUT:
+                return self._out
+            default = 1 if self._pull == Pin.PULL_UP else 0
+            return board.input_levels.get(self._id, default)
+        self._out = 1 if v else 0
+        return None
+
+    def __call__(self, v=None):
+        return self.value(v)
+
+    def on(self):
+        self._out = 1
+
+    def off(self):
+        self._out = 0
+
+    def irq(self, handler=None, trigger=3):
+        self._irq_handler = handler
+        self._irq_trigger = trigger
+
+    def __repr__(self):
+        return "Pin(%s)" % self._id
+
+
+class ADC:
+    ATTN_0DB = 0
+    ATTN_2_5DB = 1
+    ATTN_6DB = 2
+    ATTN_11DB = 3
+    WIDTH_9BIT = 0
+    WIDTH_10BIT = 1
+    WIDTH_11BIT = 2
+    WIDTH_12BIT = 3
+
+    def __init__(self, pin, atten=None):
+        self._pin = _pin_id(pin)
+        self._atten = atten
+
+    def atten(self, value):
+        self._atten = value
+
+    def width(self, value):
+        pass
+
+    def read(self):
+        return board.analog.get(self._pin, 0)
+
+    def read_u16(self):
+        return (self.read() << 4) | (self.read() >> 8)
+
+
+class PWM:
+    def __init__(self, pin, freq=None, duty=None, duty_u16=None):
+        self._pin = _pin_id(pin)
+        self._freq = freq or 5000
+        self._duty_u16 = 0
+        if duty is not None:
+            self._duty_u16 = int(duty) * 65535 // 1023
+        if duty_u16 is not None:
+            self._duty_u16 = int(duty_u16)
+        self.deinited = False
+        board.pwms[self._pin] = self
+
+    def freq(self, f=None):
+        if f is None:
+            return self._freq
+        self._freq = f
+        return None
+
+    def duty(self, d=None):
+        if d is None:
+            return self._duty_u16 * 1023 // 65535
+        self._duty_u16 = int(d) * 65535 // 1023
+        return None
+
+    def duty_u16(self, d=None):
+        if d is None:
+            return self._duty_u16
+        self._duty_u16 = max(0, min(65535, int(d)))
+        return None
+
+    def deinit(self):
+        self.deinited = True
+
+
+class Timer:
+    ONE_SHOT = 0
+    PERIODIC = 1
+
+    def __init__(self, id=-1, **kwargs):
+        self._id = id
+        self.next_due_us = None
+        self._period_us = 0
+        self._mode = Timer.PERIODIC
+        self._callback = None
+        if kwargs:
+            self.init(**kwargs)
+
+    def init(self, mode=PERIODIC, period=-1, freq=-1, callback=None):
+        if freq is not None and freq > 0:
+            self._period_us = 1_000_000 // freq
+        else:
+            self._period_us = int(period) * 1000
+        if self._period_us <= 0:
+            raise ValueError("Timer needs period= or freq=")
+        self._mode = mode
+        self._callback = callback
+        self.next_due_us = clock.now_us() + self._period_us
+        clock.register_timer(self)
+
+    def deinit(self):
+        self.next_due_us = None
+        clock.unregister_timer(self)
+
+    def fire(self):
+        callback = self._callback
+        if self._mode == Timer.PERIODIC:
+            self.next_due_us += self._period_us
+        else:
+            self.deinit()
+        if callback is not None:
+            callback(self)
+
+
+class RTC:
+    def __init__(self, id=0):
+        pass
+
+    def datetime(self, dt=None):
+        if dt is None:
+            secs = clock.time()
+            t = clock.gmtime(secs)
+            # (year, month, day, weekday, hours, minutes, seconds, subseconds)
+            sub_us = clock.epoch_us() % 1_000_000
+            return (t[0], t[1], t[2], t[6], t[3], t[4], t[5], sub_us)
+        year, month, day, _wd, hours, minutes, seconds, sub = dt
+        secs = clock.mktime((year, month, day, hours, minutes, seconds, 0, 0, 0))
+        board.rtc_datetime = dt
+        clock.set_epoch_ms(secs * 1000 + sub // 1000)
+        return None
+
+    def init(self, dt):
+        self.datetime(dt)
+
+
+class UART:
+    def __init__(self, id, baudrate=115200, **kwargs):
+        self._id = id
+        self._rx = bytearray()
+        self.written = []
+        self.deinited = False
+        self.init(baudrate, **kwargs)
+        board.uarts[id] = self
+
+    def init(self, baudrate=115200, bits=8, parity=None, stop=1, tx=None, rx=None, timeout=0, **kwargs):
+        self.baudrate = baudrate
+        self.tx = _pin_id(tx)
+        self.rx = _pin_id(rx)
+        self.timeout = timeout
+        self.deinited = False
+
+    def deinit(self):
+        self.deinited = True
+
+    def write(self, data):
+        if self.deinited:
+            raise OSError("UART%d is deinitialised" % self._id)
+        data = bytes(data)
+        self.written.append(data)
+        device = board.uart_devices.get(self._id)
+        if device is not None:
+            reply = device.handle(data)
+            if reply:
+                self._rx.extend(reply)
+        return len(data)
+
+    def any(self):
+        return len(self._rx)
+
+    def read(self, n=None):
+        if not self._rx:
+            if self.timeout:
+                clock.sleep_ms(self.timeout)
+            return None
+        if n is None or n > len(self._rx):
+            n = len(self._rx)
+        out = bytes(self._rx[:n])
+        del self._rx[:n]
+        return out
+
+    def readinto(self, buf, n=None):
+        data = self.read(len(buf) if n is None else n)
+        if not data:
+            return None
+        buf[: len(data)] = data
+        return len(data)
+
+    def flush(self):
+        pass
+
+    def txdone(self):
+        return True
+
+
+class I2C:
+    def __init__(self, id=0, scl=None, sda=None, freq=400_000, **kwargs):
+        self._id = id
+        self.scl = _pin_id(scl)
+        self.sda = _pin_id(sda)
+        self.freq = freq
+
+    def _device(self, addr):
+        device = board.i2c_devices.get(self._id, {}).get(addr)
+        if device is None:
+            raise OSError(19)  # ENODEV: no ACK at that address, as the ESP32 port reports it
+        return device
+
+    def scan(self):
+        return sorted(board.i2c_devices.get(self._id, {}))
+
+    def writeto(self, addr, buf, stop=True):
+        self._device(addr).write(bytes(buf))
+        return len(buf)
+
+    def readfrom(self, addr, nbytes, stop=True):
+        return bytes(self._device(addr).read(nbytes))
+
+    def readfrom_into(self, addr, buf, stop=True):
+        data = self.readfrom(addr, len(buf))
+        buf[: len(data)] = data
+
+    def writeto_mem(self, addr, memaddr, buf, addrsize=8):
+        self._device(addr).write_mem(memaddr, bytes(buf), addrsize)
+
+    def readfrom_mem(self, addr, memaddr, nbytes, addrsize=8):
+        return bytes(self._device(addr).read_mem(memaddr, nbytes, addrsize))
+
+    def readfrom_mem_into(self, addr, memaddr, buf, addrsize=8):
+        data = self.readfrom_mem(addr, memaddr, len(buf), addrsize)
+        buf[: len(data)] = data
+
+
+SoftI2C = I2C
+
+
+class SPI:
+    MSB = 0
+    LSB = 1
+
+    def __init__(self, id=1, baudrate=1_000_000, polarity=0, phase=0, sck=None, mosi=None, miso=None, **kw):
+        self._id = id
+        self.baudrate = baudrate
+        self.polarity = polarity
+        self.phase = phase
+        self.sck = _pin_id(sck)
+        self.mosi = _pin_id(mosi)
+        self.miso = _pin_id(miso)
+
+    def init(self, **kwargs):
+        for key, value in kwargs.items():
+            setattr(self, key, value)
+
+    def _selected(self):
+        # The device whose chip-select pin is driven low right now.
+        for cs_id, device in board.spi_devices.items():
+            pin = board.pins.get(cs_id)
+            if pin is not None and pin._mode == Pin.OUT and pin._out == 0:
+                return device
+        return None
+
+    def write_readinto(self, write_buf, read_buf):
+        device = self._selected()
+        reply = device.transfer(bytes(write_buf)) if device is not None else b"\xff" * len(write_buf)
+        read_buf[: len(reply)] = reply
+
+    def write(self, buf):
+        device = self._selected()
+        if device is not None:
+            device.transfer(bytes(buf))
+
+    def readinto(self, buf, write=0x00):
+        out = bytearray(len(buf))
+        self.write_readinto(bytes([write]) * len(buf), out)
+        buf[:] = out
+
+    def read(self, nbytes, write=0x00):
+        buf = bytearray(nbytes)
+        self.readinto(buf, write)
+        return bytes(buf)
+
+    def deinit(self):
+        pass
+
+
+SoftSPI = SPI
+
+
+def time_pulse_us(pin, pulse_level, timeout_us=1_000_000):
+    width = board.pulses_us.get(_pin_id(pin), -1)
+    clock.sleep_us(width if width > 0 else timeout_us)
+    return width
+
+
+def bitstream(pin, encoding, timing, data):
+    board.bitstreams.append((_pin_id(pin), tuple(timing), bytes(data)))
+
+
+def freq(hz=None):
+    return 240_000_000 if hz is None else None
+
+
+def unique_id():
+    return b"\x24\x0a\xc4\x00\x11\x22"
+
+
+def reset():
+    board.resets += 1
+
+
+def soft_reset():
+    board.resets += 1
+
+
+def idle():
+    clock.sleep_us(100)
+
+
+def disable_irq():
+    return 0
+
+
+def enable_irq(state=0):
+    pass
+
+
+def reset_cause():
+    return 1
+
+
+PWRON_RESET = 1
+HARD_RESET = 2
+WDT_RESET = 3
+DEEPSLEEP_RESET = 4
+SOFT_RESET = 5
