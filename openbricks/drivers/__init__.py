@@ -1,0 +1,1 @@
+"""One module per supported component; import the one your wiring uses (nothing is imported eagerly)."""
