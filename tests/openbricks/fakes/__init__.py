@@ -32,3 +32,6 @@ def reset():
     clock.reset()
     esp32.reset()
     machine.board.reset()
+    pins = sys.modules.get("openbricks.pins")
+    if pins is not None:  # GPIO claims made by one test's drivers must not leak into the next
+        pins.reset_claims()
