@@ -32,6 +32,11 @@ def reset():
     clock.reset()
     esp32.reset()
     machine.board.reset()
+    # Runtime state one test's drivers leave behind (GPIO claims, an engaged e-stop and its halt
+    # callbacks) must not leak into the next test.
     pins = sys.modules.get("openbricks.pins")
-    if pins is not None:  # GPIO claims made by one test's drivers must not leak into the next
+    if pins is not None:
         pins.reset_claims()
+    estop = sys.modules.get("openbricks.estop")
+    if estop is not None:
+        estop.clear(0)
