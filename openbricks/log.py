@@ -1,0 +1,308 @@
+"""Run logs: every program's print output and framing lines, stamped and kept on flash.
+
+Storage: MAX_RUNS slot files `slot_<k>.log` in the log directory, reused in place. Run N truncates and
+rewrites slot N % MAX_RUNS (deleting and recreating files churns littlefs metadata until every commit
+slows down). The run index lives in the file's header line, `<epoch_ms> -- run_<N> --`, so indices
+keep growing across reboots without a separate counter file.
+
+Every line starts with the UTC Unix epoch in milliseconds: the hub has no timezone, the host renders
+local time, and the host sets the RTC on every connect (an unsynced hub stamps year-2000 times, which
+is self-diagnosing).
+
+Writes are asynchronous: print only appends to a RAM buffer and returns; `pump()`, called from the
+launcher's timer tick, moves bytes to the file without committing. A littlefs commit costs tens of
+milliseconds on the ESP32, so it is paid only at the durable points: the framing lines (`write_text`,
+`note`) and the end of the run. A hard reset can therefore lose recent prints, never the framing.
+
+Each run is capped at `max_bytes` of print output so a runaway print loop can't fill the flash; the
+framing lines still fit in a small reserve after the cap, because the end of a runaway run is exactly
+what its owner wants to read.
+"""
+
+import os
+import time
+
+LOG_DIR = "/openbricks_logs"
+MAX_RUNS = 10
+MAX_BYTES = 64 * 1024
+
+_FRAMING_RESERVE = 1024  # bytes past the cap kept for started:/stopped:/traceback lines
+_BUFFER_LIMIT = 2048  # RAM held before a print pays for its own write (the tick is starved)
+_HEADER_PREFIX = "-- run_"
+
+_active = [None]  # the session of the running program, if any
+_epoch_offset_ms = [None]
+
+
+def epoch_ms():
+    """UTC Unix epoch milliseconds from the RTC, whichever epoch (1970 or 2000) the port counts from."""
+    if _epoch_offset_ms[0] is None:
+        # Ports built with a 2000 epoch report gmtime(0) as 2000-01-01.
+        _epoch_offset_ms[0] = 946684800000 if time.gmtime(0)[0] == 2000 else 0
+    return time.time_ns() // 1000000 + _epoch_offset_ms[0]
+
+
+def _join(directory, name):
+    return directory.rstrip("/") + "/" + name
+
+
+def _slot_path(log_dir, slot):
+    return _join(log_dir, "slot_%d.log" % slot)
+
+
+def _header_index(path):
+    """Run index from a slot file's header line, or None if the file is missing or not a run log."""
+    try:
+        with open(path, "rb") as f:
+            first = f.readline(80)
+    except OSError:
+        return None
+    text = first.decode()
+    at = text.find(_HEADER_PREFIX)
+    if at < 0:
+        return None
+    digits = text[at + len(_HEADER_PREFIX) :].split(" ", 1)[0]
+    try:
+        return int(digits)
+    except ValueError:
+        return None
+
+
+def list_runs(log_dir=LOG_DIR, max_runs=MAX_RUNS):
+    """[(index, path)] of the runs still on flash, oldest first."""
+    runs = []
+    for slot in range(max_runs):
+        path = _slot_path(log_dir, slot)
+        index = _header_index(path)
+        if index is not None:
+            runs.append((index, path))
+    runs.sort()
+    return runs
+
+
+def run_path(index, log_dir=LOG_DIR, max_runs=MAX_RUNS):
+    """Path of run `index`; OSError if that run was overwritten by a newer one or never happened."""
+    path = _slot_path(log_dir, index % max_runs)
+    if index < 0 or _header_index(path) != index:
+        raise OSError(
+            2,
+            "run %d is not on the hub (only the last %d runs are kept); list them with list_runs()"
+            % (index, max_runs),
+        )
+    return path
+
+
+def read_run(index, log_dir=LOG_DIR, max_runs=MAX_RUNS):
+    """Text of run `index`; OSError if it is no longer (or never was) on the hub."""
+    with open(run_path(index, log_dir, max_runs), "rb") as f:
+        return f.read().decode()
+
+
+def _ensure_dir(path):
+    try:
+        os.mkdir(path)
+    except OSError:
+        os.stat(path)  # already there is fine; anything else (no such parent, a file) raises
+
+
+class _LogSession:
+    """One run's log file; use through `session()` as a context manager."""
+
+    def __init__(self, log_dir=LOG_DIR, max_bytes=MAX_BYTES, max_runs=MAX_RUNS):
+        _ensure_dir(log_dir)
+        runs = list_runs(log_dir, max_runs)
+        self.index = runs[-1][0] + 1 if runs else 0
+        self.path = _slot_path(log_dir, self.index % max_runs)
+        self.max_bytes = max_bytes
+        self.worst_write_ms = 0
+        self.dropped_bytes = 0
+        self._file = open(self.path, "wb")  # truncates the slot in place
+        self._pending = []
+        self._pending_bytes = 0
+        self._file_bytes = 0
+        self._line_open = False  # the last print ended without a newline
+        self._capped = False
+        self._failed = None  # the OSError that stopped file writes, if any
+        self.write_text("%s%d --" % (_HEADER_PREFIX, self.index))
+
+    # -- what goes in ------------------------------------------------------------------------
+
+    def _stamp(self, text):
+        """`text` with the epoch stamp in front of every line that starts in it."""
+        stamp = "%d " % epoch_ms()
+        out = []
+        start = 0
+        while start < len(text):
+            end = text.find("\n", start)
+            end = len(text) if end < 0 else end + 1
+            if not self._line_open:
+                out.append(stamp)
+            out.append(text[start:end])
+            self._line_open = text[end - 1] != "\n"
+            start = end
+        return "".join(out).encode()
+
+    def _queue(self, data):
+        self._pending.append(data)
+        self._pending_bytes += len(data)
+        if self._pending_bytes >= _BUFFER_LIMIT:
+            self.pump()
+
+    def write(self, text):
+        """Program output (from print): buffered, dropped from the file once the run passes the cap."""
+        if not text or self._file is None:
+            return
+        data = self._stamp(text)
+        used = self._file_bytes + self._pending_bytes
+        if self._capped or used + len(data) > self.max_bytes:
+            self.dropped_bytes += len(data)
+            if not self._capped:
+                self._capped = True
+                self.write_text(
+                    "log capped at %d bytes: further output is dropped from this file (the console "
+                    "still shows it)" % self.max_bytes
+                )
+            return
+        self._queue(data)
+
+    def write_text(self, text):
+        """A framing line (or lines, e.g. a traceback): stamped, always kept, committed now."""
+        if self._file is None:
+            return
+        if self._line_open:
+            self._queue(b"\n")
+            self._line_open = False
+        if not text.endswith("\n"):
+            text += "\n"
+        data = self._stamp(text)
+        used = self._file_bytes + self._pending_bytes
+        if used + len(data) > self.max_bytes + _FRAMING_RESERVE:
+            self.dropped_bytes += len(data)
+            return
+        self._queue(data)
+        self.flush()
+
+    # -- what goes out -----------------------------------------------------------------------
+
+    def _timed(self, action, data=None):
+        started = time.ticks_ms()
+        try:
+            if data is None:
+                action()
+            else:
+                action(data)
+        except OSError as exc:
+            # A full or failing filesystem must not take the program (or the tick) down with it.
+            self._failed = exc
+            self._pending = []
+            self._pending_bytes = 0
+            return
+        spent = time.ticks_diff(time.ticks_ms(), started)
+        if spent > self.worst_write_ms:
+            self.worst_write_ms = spent
+
+    def pump(self):
+        """Move buffered bytes to the file (no commit). Never raises."""
+        if not self._pending or self._file is None or self._failed is not None:
+            return
+        data = b"".join(self._pending)
+        self._pending = []
+        self._pending_bytes = 0
+        self._file_bytes += len(data)
+        self._timed(self._file.write, data)
+
+    def flush(self):
+        """Move buffered bytes to the file and commit them to flash. Never raises."""
+        self.pump()
+        if self._file is not None and self._failed is None:
+            self._timed(self._file.flush)
+
+    def close(self):
+        if self._file is None:
+            return
+        if self._line_open:
+            self._queue(b"\n")
+            self._line_open = False
+        self.flush()
+        try:
+            self._file.close()
+        except OSError:
+            pass
+        self._file = None
+
+    def __enter__(self):
+        _active[0] = self
+        return self
+
+    def __exit__(self, exc_type, exc, tb):
+        if _active[0] is self:
+            _active[0] = None
+        self.close()
+        return False
+
+
+def session(log_dir=LOG_DIR, max_bytes=MAX_BYTES, max_runs=MAX_RUNS):
+    """A fresh run log; `with log.session() as s:` makes it the active one for print and note."""
+    return _LogSession(log_dir, max_bytes, max_runs)
+
+
+def active():
+    """The active session, or None when no program is running."""
+    return _active[0]
+
+
+def write(text):
+    """Program output into the active run's log (no-op when no program runs)."""
+    current = _active[0]
+    if current is not None:
+        current.write(text)
+
+
+def write_text(text):
+    """Framing text (one or more lines) into the active run's log, committed now."""
+    current = _active[0]
+    if current is not None:
+        current.write_text(text)
+
+
+def note(text):
+    """One stamped line in the active run's log file only (the console is not touched)."""
+    write_text(text)
+
+
+def pump():
+    """Drain buffered output to the file; called from the launcher's timer tick. Never raises."""
+    current = _active[0]
+    if current is not None:
+        current.pump()
+
+
+def flush():
+    """Commit the active run's output now (the stop button, or before anything that may reset)."""
+    current = _active[0]
+    if current is not None:
+        current.flush()
+
+
+def worst_write_ms():
+    """Slowest single file write or commit of the active run, in ms (0 when none)."""
+    current = _active[0]
+    return 0 if current is None else current.worst_write_ms
+
+
+def tee_print(*args, **kwargs):
+    """print() that also copies its text into the active run's log.
+
+    The launcher installs it for the program's duration; teeing at print is what MicroPython allows
+    on every port (sys.stdout is not rebindable everywhere).
+    """
+    console_print(*args, **kwargs)
+    current = _active[0]
+    if current is not None:
+        sep = kwargs.get("sep")
+        end = kwargs.get("end")
+        text = (" " if sep is None else sep).join([str(a) for a in args])
+        current.write(text + ("\n" if end is None else end))
+
+
+console_print = print  # the interpreter's own print, kept before anyone tees it
