@@ -87,6 +87,16 @@ typedef struct {
 
     ob_servo_mode_t mode;
     ob_then_t then;           /* what a position move does when it ends */
+    /* The closed-loop command being run, kept so a command given before the
+     * first angle reading can be planned once that reading arrives. */
+    bool needs_plan;
+    bool cmd_relative;        /* cmd_value_deg is relative to the start (run_angle) */
+    float cmd_speed_dps;
+    float cmd_value_deg;
+    float cmd_accel_dps2;
+    float cmd_decel_dps2;
+    bool reset_pending;       /* reset_angle before the first reading */
+    float reset_to_deg;
     uint32_t start_ms;        /* scheduler time of the trajectory's t = 0 */
     float ref_offset_deg;     /* speed runs: how far the reference was dragged back */
     float integral_deg_s;     /* position loop integrator */
@@ -98,6 +108,7 @@ typedef struct {
     uint32_t now_ms;
     bool clock_valid;         /* a tick has happened since init */
     bool have_angle;          /* a reading has been seen since init */
+    bool output_valid;        /* something has been written since init */
     float angle_deg;          /* last measured angle, in the user frame */
     float offset_deg;         /* user angle = sensor angle + offset_deg */
     float duty_out_pct;       /* duty written last (0 while coasting) */
@@ -109,14 +120,16 @@ typedef struct {
     bool stalled;
     uint32_t stall_since_ms;
     bool stall_timing;
-    bool feedback_lost;       /* latched: the angle went silent and the motor was coasted */
+    bool feedback_lost;       /* latched until the next command: the angle went silent
+                               * during a closed-loop command, which was halted (coast) */
     uint32_t last_read_ms;    /* time of the last fresh angle */
     uint32_t failed_reads;    /* total failed reads since init */
     uint32_t silent_ticks;    /* consecutive failed reads */
 
-    /* Hoisted per-tick constants: 1/dt for the cached dt. */
+    /* Hoisted per-tick constants for the usual, unchanging tick spacing. */
     uint32_t cached_dt_ms;
     float cached_dt_s;
+    float cached_inv_dt;
 } ob_servo_t;
 
 /* Defaults for an ST-3032-class geared servo (888 deg/s no load, ~1 N*m
@@ -134,6 +147,10 @@ void ob_servo_run_speed(ob_servo_t *s, float speed_dps);
 void ob_servo_run_target(ob_servo_t *s, float speed_dps, float target_deg, ob_then_t then);
 /* Relative move; direction is sign(speed_dps) * sign(angle_deg), as in Pybricks. */
 void ob_servo_run_angle(ob_servo_t *s, float speed_dps, float angle_deg, ob_then_t then);
+/* A position move with its own acceleration and deceleration (magnitudes):
+ * to value_deg, or by value_deg (with run_angle's direction rule) when relative. */
+void ob_servo_move(ob_servo_t *s, float speed_dps, float value_deg, bool relative, ob_then_t then,
+                   float accel_dps2, float decel_dps2);
 void ob_servo_hold(ob_servo_t *s);
 void ob_servo_dc(ob_servo_t *s, float duty_pct);
 void ob_servo_brake(ob_servo_t *s);
