@@ -280,7 +280,7 @@ class UART:
         if n is None or n > len(self._rx):
             n = len(self._rx)
         out = bytes(self._rx[:n])
-        del self._rx[:n]
+        self._rx = self._rx[n:]  # MicroPython bytearrays do not support slice deletion
         return out
 
     def readinto(self, buf, n=None):
