@@ -86,6 +86,10 @@ static void stillness_update(ob_imu_yaw_t *yaw, float prev_dps, float gyro_z_dps
 }
 
 void ob_imu_yaw_update(ob_imu_yaw_t *yaw, float gyro_z_dps, uint32_t now_us) {
+    /* A garbled read is a missed sample: one NaN would otherwise poison the heading for good. */
+    if (!isfinite(gyro_z_dps)) {
+        return;
+    }
     if (!yaw->have_sample) {
         yaw->have_sample = true;
         yaw->last_us = now_us;

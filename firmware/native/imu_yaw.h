@@ -11,6 +11,9 @@
  * slow low-pass, which follows thermal drift without letting a slow crawl of
  * the robot leak in. A bias persisted from an earlier run can be seeded so a
  * program that moves straight after boot is corrected from the first sample.
+ * Once a bias is known, stillness is judged against it, so a seed more than
+ * still_band_dps off would never be corrected at rest; seeds come from the
+ * same sensor, whose bias moves by hundredths of a degree per second.
  *
  * Heading is CW-positive seen from above, like the drivebase, and unwrapped
  * (multi-turn). Time comes from a free-running microsecond clock passed with
@@ -78,7 +81,8 @@ void ob_imu_yaw_init(ob_imu_yaw_t *yaw, const ob_imu_yaw_config_t *cfg);
 /*
  * One gyro sample: Z rate in deg/s as the sensor reports it, and the
  * microsecond clock at which it was taken (wrapping uint32 is fine). The
- * first sample only starts the clock.
+ * first sample only starts the clock; a non-finite rate is dropped like a
+ * missed sample.
  */
 void ob_imu_yaw_update(ob_imu_yaw_t *yaw, float gyro_z_dps, uint32_t now_us);
 

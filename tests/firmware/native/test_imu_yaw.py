@@ -292,3 +292,14 @@ def test_a_longer_settle_window_delays_the_lock():
     assert not yaw.calibrated()
     bench.rest(1.0)
     assert yaw.calibrated()
+
+
+@pytest.mark.parametrize("garbled", [math.nan, math.inf, -math.inf])
+def test_a_garbled_sample_is_dropped_like_a_missed_one(garbled):
+    yaw = ImuYaw()
+    yaw.seed_bias(0.0)
+    yaw.update(-90.0, 0)
+    yaw.update(garbled, 5_000)
+    yaw.update(-90.0, 10_000)  # integrates the whole 10 ms
+    assert yaw.heading() == pytest.approx(0.9, abs=1e-4)
+    assert math.isfinite(yaw.rate())

@@ -71,9 +71,6 @@ static PyObject *imu_yaw_update(PyObject *self, PyObject *args) {
     if (!PyArg_ParseTuple(args, "dO:update", &gyro_z_dps, &now_obj)) {
         return NULL;
     }
-    if (require_finite(gyro_z_dps, "gyro_z_dps") < 0) {
-        return NULL;
-    }
     if (!PyLong_Check(now_obj)) {
         return PyErr_Format(PyExc_TypeError, "now_us must be an int (microseconds), not %.100s",
                             Py_TYPE(now_obj)->tp_name);
@@ -138,7 +135,8 @@ static PyObject *imu_yaw_seed_bias(PyObject *self, PyObject *args) {
 static PyMethodDef imu_yaw_methods[] = {
     {"update", imu_yaw_update, METH_VARARGS,
      "update(gyro_z_dps, now_us)\n\nOne gyro sample: Z rate as the sensor reports it (deg/s) and the "
-     "microsecond clock when it was taken. The first sample only starts the clock."},
+     "microsecond clock when it was taken. The first sample only starts the clock; a NaN or infinite "
+     "rate is dropped like a missed sample, as on the hub."},
     {"heading", imu_yaw_heading, METH_NOARGS, "heading() -> float\n\nContinuous heading, CW-positive, deg."},
     {"rate", imu_yaw_rate, METH_NOARGS,
      "rate() -> float\n\nBias-corrected heading rate of the last sample, CW-positive, deg/s."},
