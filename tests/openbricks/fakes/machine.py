@@ -28,6 +28,7 @@ class _Board:
         self.spi_devices = {}  # cs pin id -> device with .transfer(bytes) -> bytes
         self.pulses_us = {}  # echo pin id -> pulse width time_pulse_us() returns (-1/-2 on timeout)
         self.bitstreams = []  # (pin id, timing, bytes) written by machine.bitstream
+        self.encoders = {}  # PCNT unit -> the Encoder counting on it; tests move its .count
         self.rtc_datetime = None
         self.resets = 0
 
@@ -109,7 +110,7 @@ class Pin:
     def off(self):
         self._out = 0
 
-    def irq(self, handler=None, trigger=3):
+    def irq(self, handler=None, trigger=3, hard=False):
         self._irq_handler = handler
         self._irq_trigger = trigger
 
@@ -173,6 +174,32 @@ class PWM:
             return self._duty_u16
         self._duty_u16 = max(0, min(65535, int(d)))
         return None
+
+    def deinit(self):
+        self.deinited = True
+
+
+class Encoder:
+    """PCNT quadrature counter (ESP32 machine.Encoder); `count` is what the hardware has counted."""
+
+    def __init__(self, id, phase_a=None, phase_b=None, **kwargs):
+        self._id = id
+        self.init(phase_a, phase_b, **kwargs)
+        board.encoders[id] = self
+
+    def init(self, phase_a=None, phase_b=None, filter_ns=0, phases=1):
+        self.phase_a = _pin_id(phase_a)
+        self.phase_b = _pin_id(phase_b)
+        self.filter_ns = filter_ns
+        self.phases = phases
+        self.count = 0
+        self.deinited = False
+
+    def value(self, value=None):
+        current = self.count
+        if value is not None:
+            self.count = int(value)
+        return current
 
     def deinit(self):
         self.deinited = True

@@ -1,0 +1,115 @@
+"""Quadrature encoders: counts of A/B edges (x4 decoding), read by the motor drivers.
+
+Two ways to count, one interface (`count()`, `reset(count)`, `close()`):
+
+- QuadratureEncoder decodes in a pin-change interrupt. Fine for Hall
+  encoders behind a gearbox (a JGB37-520 at 300 RPM is ~6.6 k edges/s), but
+  Pin.irq tops out around 5-10 kHz of edges.
+- PCNTEncoder lets the ESP32's pulse-counter peripheral count (machine.Encoder),
+  with its glitch filter, for high-resolution GMR encoders (MG370) whose edge
+  rate no interrupt handler could keep up with. One PCNT unit per encoder
+  (ESP32 has 8, ESP32-S3 has 4).
+"""
+
+from openbricks import pins
+from openbricks.drivers import claim_pins, release_pins
+
+# Count change for (previous AB state << 2 | new AB state), AB = (A << 1) | B. Forward is
+# A leading B: 00 -> 10 -> 11 -> 01. Both bits changing at once means an edge was missed: 0.
+_STEP = (0, -1, 1, 0, 1, 0, 0, -1, -1, 0, 0, 1, 0, 1, -1, 0)
+_MISSED = (3, 6, 9, 12)  # transitions where both channels changed
+
+# PCNT filter: the manual counts it in 80 MHz APB cycles (1023 ~ 12.8 us); machine.Encoder takes ns.
+_NS_PER_APB_CYCLE = 12.5
+
+
+class QuadratureEncoder:
+    """x4 decoding of an A/B encoder in a hard pin interrupt."""
+
+    def __init__(self, pin_a, pin_b, invert=False, name="encoder"):
+        from machine import Pin
+
+        self._pins = (pin_a, pin_b)
+        claim_pins(self, ((pin_a, name + " A", False), (pin_b, name + " B", False)))
+        self._sign = -1 if invert else 1
+        self._a = Pin(pin_a, Pin.IN, Pin.PULL_UP)
+        self._b = Pin(pin_b, Pin.IN, Pin.PULL_UP)
+        self._state = (self._a.value() << 1) | self._b.value()
+        self._count = 0
+        self.missed = 0  # transitions that skipped a state: edges came faster than the interrupt
+        trigger = Pin.IRQ_RISING | Pin.IRQ_FALLING
+        self._a.irq(self._edge, trigger, hard=True)
+        self._b.irq(self._edge, trigger, hard=True)
+
+    def _edge(self, _pin):
+        state = (self._a.value() << 1) | self._b.value()
+        transition = (self._state << 2) | state
+        self._count += _STEP[transition]
+        if transition in _MISSED:
+            self.missed += 1
+        self._state = state
+
+    def count(self):
+        return self._count * self._sign
+
+    def reset(self, count=0):
+        self._count = count * self._sign
+
+    def close(self):
+        self._a.irq(None)
+        self._b.irq(None)
+        release_pins(self, self._pins)
+
+
+class PCNTEncoder:
+    """x4 counting of an A/B encoder by a PCNT unit (machine.Encoder)."""
+
+    _units = {}  # unit -> the encoder counting on it
+
+    def __init__(self, pin_a, pin_b, unit=0, filter=1023, invert=False, name="encoder"):
+        from machine import Pin
+
+        holder = PCNTEncoder._units.get(unit)
+        if holder is not None and not holder._live():
+            holder = None  # left over from a finished program: the launcher already took its pins back
+        if holder is not None:
+            raise ValueError(
+                "PCNT unit %d already counts the encoder on GPIO %d/%d; give each motor its own "
+                "pcnt_unit (ESP32: 0-7, ESP32-S3: 0-3)" % (unit, holder._pins[0], holder._pins[1])
+            )
+        if not 0 <= filter <= 1023:
+            raise ValueError("pcnt_filter=%r: the PCNT glitch filter takes 0..1023 APB cycles" % (filter,))
+        self._pins = (pin_a, pin_b)
+        claim_pins(self, ((pin_a, name + " A", False), (pin_b, name + " B", False)))
+        try:
+            from machine import Encoder
+
+            self._encoder = Encoder(
+                unit,
+                Pin(pin_a, Pin.IN),
+                Pin(pin_b, Pin.IN),
+                phases=4,
+                filter_ns=int(filter * _NS_PER_APB_CYCLE),
+            )
+        except Exception:
+            release_pins(self, self._pins)
+            raise
+        self.unit = unit
+        self._sign = -1 if invert else 1
+        PCNTEncoder._units[unit] = self
+
+    def _live(self):
+        owner = pins.owner_of(self._pins[0])
+        return owner is not None and owner[1] is self
+
+    def count(self):
+        return self._encoder.value() * self._sign
+
+    def reset(self, count=0):
+        self._encoder.value(count * self._sign)
+
+    def close(self):
+        self._encoder.deinit()
+        release_pins(self, self._pins)
+        if PCNTEncoder._units.get(self.unit) is self:
+            del PCNTEncoder._units[self.unit]

@@ -1,0 +1,77 @@
+"""L298N dual H-bridge: one brushed DC motor per channel, open loop.
+
+    IN1 IN2  bridge
+     0   0   coast (outputs off)
+     1   0   forward
+     0   1   reverse
+     1   1   brake (both low-side switches on: the winding is shorted)
+
+Speed is the PWM duty on EN. With no encoder only dc / brake / coast exist;
+the closed-loop half of the Motor contract raises (JGB37Motor adds an
+encoder to the same bridge channel).
+"""
+
+from micropython import const
+
+from openbricks.drivers import claim_pins, release_pins
+from openbricks.interfaces import Motor
+
+# The L298N's bipolar switches are slow; a few kHz keeps switching losses and duty distortion small.
+_PWM_FREQ_HZ = const(1000)
+
+
+class L298NMotor(Motor):
+    """Open-loop brushed DC motor on one H-bridge channel."""
+
+    CHIP = "L298N"
+
+    def __init__(self, in1, in2, pwm, invert=False, pwm_freq=_PWM_FREQ_HZ):
+        from machine import PWM, Pin
+
+        self.invert = bool(invert)
+        self._pins = (in1, in2, pwm)
+        claim_pins(
+            self,
+            (
+                (in1, self.CHIP + " IN1", True),
+                (in2, self.CHIP + " IN2", True),
+                (pwm, self.CHIP + " PWM/EN", True),
+            ),
+        )
+        self._in1 = Pin(in1, Pin.OUT, value=0)
+        self._in2 = Pin(in2, Pin.OUT, value=0)
+        self._pwm = PWM(Pin(pwm, Pin.OUT), freq=pwm_freq, duty_u16=0)
+        self._duty = 0
+
+    def dc(self, duty):
+        """Fixed duty -100..100 (sign = direction, after invert). 0 releases the motor like coast()."""
+        duty = max(-100, min(100, duty))
+        if self.invert:
+            duty = -duty
+        if duty == 0:
+            self.coast()
+            return
+        self._in1.value(1 if duty > 0 else 0)
+        self._in2.value(0 if duty > 0 else 1)
+        self._pwm.duty_u16(int(abs(duty) * 65535 / 100))
+        self._duty = duty
+
+    def brake(self):
+        """Short the winding: the motor's own back-EMF stops it quickly."""
+        self._in1.value(1)
+        self._in2.value(1)
+        self._pwm.duty_u16(65535)
+        self._duty = 0
+
+    def coast(self):
+        """Switch the bridge off: the motor spins down freely."""
+        self._pwm.duty_u16(0)
+        self._in1.value(0)
+        self._in2.value(0)
+        self._duty = 0
+
+    def close(self):
+        """Release the bridge and hand its pins back."""
+        self.coast()
+        self._pwm.deinit()
+        release_pins(self, self._pins)

@@ -1,0 +1,97 @@
+"""Encoder counting: interrupt-decoded quadrature and the PCNT peripheral."""
+
+import machine
+
+from fakes.expect import raises
+from openbricks import pins
+from openbricks.drivers.encoder import PCNTEncoder, QuadratureEncoder
+
+# A leading B, one full cycle from rest with both lines pulled up.
+_FORWARD = ((0, 1), (0, 0), (1, 0), (1, 1))
+
+
+def _spin(cycles, a=7, b=8):
+    """Drive the A/B lines through `cycles` quadrature cycles (negative: backwards)."""
+    order = _FORWARD if cycles >= 0 else tuple(reversed(((1, 1),) + _FORWARD[:3]))
+    for _ in range(abs(cycles)):
+        for level_a, level_b in order:
+            if machine.board.input_levels.get(a, 1) != level_a:
+                machine.board.set_input(a, level_a)
+            if machine.board.input_levels.get(b, 1) != level_b:
+                machine.board.set_input(b, level_b)
+
+
+def test_interrupt_decoder_counts_four_edges_per_cycle_both_ways():
+    pins.reset_claims()
+    enc = QuadratureEncoder(7, 8)
+    _spin(10)
+    assert enc.count() == 40
+    _spin(-3)
+    assert enc.count() == 28
+    assert enc.missed == 0
+
+
+def test_invert_and_reset():
+    pins.reset_claims()
+    enc = QuadratureEncoder(7, 8, invert=True)
+    _spin(2)
+    assert enc.count() == -8
+    enc.reset(100)
+    _spin(1)
+    assert enc.count() == 96
+
+
+def test_a_skipped_state_is_not_counted_but_is_reported():
+    pins.reset_claims()
+    enc = QuadratureEncoder(7, 8)
+    pin_b = machine.board.pins[8]
+    machine.board.input_levels[7] = 0
+    machine.board.input_levels[8] = 0
+    pin_b._irq_handler(pin_b)  # both lines flipped before the handler ran
+    assert enc.count() == 0
+    assert enc.missed == 1
+
+
+def test_interrupt_decoder_pins_are_claimed_and_released():
+    pins.reset_claims()
+    enc = QuadratureEncoder(7, 8, name="left encoder")
+    with raises(pins.ReservedPinError, "in use as the left encoder A"):
+        QuadratureEncoder(7, 12)
+    enc.close()
+    QuadratureEncoder(7, 12)
+
+
+def test_pcnt_encoder_counts_x4_with_the_glitch_filter_and_invert():
+    pins.reset_claims()
+    enc = PCNTEncoder(7, 8, unit=1, invert=True)
+    hw = machine.board.encoders[1]
+    assert (hw.phase_a, hw.phase_b, hw.phases, hw.filter_ns) == (7, 8, 4, 12787)
+    hw.count = 68028
+    assert enc.count() == -68028
+    enc.reset(0)
+    assert hw.count == 0 and enc.count() == 0
+    enc.reset(500)
+    assert enc.count() == 500
+
+
+def test_each_pcnt_unit_counts_one_encoder():
+    pins.reset_claims()
+    first = PCNTEncoder(7, 8, unit=0)
+    with raises(ValueError, "PCNT unit 0 already counts the encoder on GPIO 7/8"):
+        PCNTEncoder(12, 13, unit=0)
+    assert pins.owner_of(12) is None
+    first.close()
+    PCNTEncoder(12, 13, unit=0)
+
+
+def test_a_unit_left_over_from_a_finished_program_is_free_again():
+    pins.reset_claims()
+    PCNTEncoder(7, 8, unit=2)
+    pins.reset_claims()  # what the launcher does with a finished program's claims
+    PCNTEncoder(7, 8, unit=2)
+
+
+def test_pcnt_filter_range_is_checked():
+    pins.reset_claims()
+    with raises(ValueError, "0..1023 APB cycles"):
+        PCNTEncoder(7, 8, unit=3, filter=5000)
