@@ -15,6 +15,14 @@
 /* Below this the non-moving axis of a new move counts as at rest and is simply held. */
 #define OB_DB_REST_DPS 1.0f
 
+/*
+ * A robot pinned (trajectories paused) for at least this long that then moves
+ * faster than OB_DB_RELEASE_DPS, or stops being pinned, has been released: the
+ * rest of its command is re-planned from where it is.
+ */
+#define OB_DB_PINNED_MIN_MS 20u
+#define OB_DB_RELEASE_DPS 20.0f
+
 void ob_drivebase_default_gains(ob_drivebase_gains_t *g) {
     /*
      * Feed-forward from the ST-3032 torque-speed line (888 deg/s no-load at
@@ -163,16 +171,28 @@ static void begin_command(ob_drivebase_t *db, float *s0, float *vs0, float *d0, 
     db->done = false;
     db->settling = false;
     db->landings = 0;
+    db->pinned_ms = 0;
 }
 
-/* The axis a move does not drive: held where it is, or brought to rest first if it is moving. */
-static void plan_passive_axis(ob_drivebase_axis_t *axis, float x0, float v0, float accel_dps2) {
+static void set_limits(ob_drivebase_axis_t *axis, float speed_dps, float accel_dps2) {
+    axis->speed_dps = speed_dps;
+    axis->accel_dps2 = accel_dps2;
+}
+
+/*
+ * The axis a move does not drive: held where it is, or, if it is still
+ * moving (chained after a curve or a drive), brought back to where it was
+ * when the command came, so a straight after an arc keeps the arc's final
+ * heading.
+ */
+static void plan_passive_axis(ob_drivebase_axis_t *axis, float x0, float v0, float speed_dps, float accel_dps2) {
+    set_limits(axis, speed_dps, accel_dps2);
+    axis->target_deg = x0;
     if (fabsf(v0) < OB_DB_REST_DPS) {
         ob_trajectory_plan_hold(&axis->trajectory, x0);
     } else {
-        ob_trajectory_plan_speed(&axis->trajectory, x0, v0, 0.0f, accel_dps2);
+        ob_trajectory_plan_move(&axis->trajectory, x0, v0, x0, speed_dps, accel_dps2, accel_dps2, false);
     }
-    axis->target_deg = ob_trajectory_end_deg(&axis->trajectory);
 }
 
 bool ob_drivebase_straight(ob_drivebase_t *db, float distance_mm, ob_then_t then) {
@@ -182,9 +202,10 @@ bool ob_drivebase_straight(ob_drivebase_t *db, float distance_mm, ob_then_t then
     float s0, vs0, d0, vd0;
     begin_command(db, &s0, &vs0, &d0, &vd0);
     db->sum.target_deg = s0 + distance_mm * db->deg_per_mm;
+    set_limits(&db->sum, db->straight_speed_dps, db->acceleration_dps2);
     ob_trajectory_plan_move(&db->sum.trajectory, s0, vs0, db->sum.target_deg, db->straight_speed_dps,
                             db->acceleration_dps2, db->acceleration_dps2, then == OB_THEN_CONTINUE);
-    plan_passive_axis(&db->diff, d0, vd0, db->turn_acceleration_dps2);
+    plan_passive_axis(&db->diff, d0, vd0, db->turn_rate_dps, db->turn_acceleration_dps2);
     db->mode = OB_DB_MOVE;
     db->then = then;
     return true;
@@ -197,9 +218,10 @@ bool ob_drivebase_turn(ob_drivebase_t *db, float angle_deg, ob_then_t then) {
     float s0, vs0, d0, vd0;
     begin_command(db, &s0, &vs0, &d0, &vd0);
     db->diff.target_deg = d0 + angle_deg * db->diff_per_heading;
+    set_limits(&db->diff, db->turn_rate_dps, db->turn_acceleration_dps2);
     ob_trajectory_plan_move(&db->diff.trajectory, d0, vd0, db->diff.target_deg, db->turn_rate_dps,
                             db->turn_acceleration_dps2, db->turn_acceleration_dps2, false);
-    plan_passive_axis(&db->sum, s0, vs0, db->acceleration_dps2);
+    plan_passive_axis(&db->sum, s0, vs0, db->straight_speed_dps, db->acceleration_dps2);
     db->mode = OB_DB_MOVE;
     db->then = then == OB_THEN_CONTINUE ? OB_THEN_HOLD : then;
     return true;
@@ -221,15 +243,17 @@ bool ob_drivebase_curve(ob_drivebase_t *db, float radius_mm, float angle_deg, ob
     /* The outer wheel runs at centre * (1 + track / 2|R|): scale so it meets the settings exactly. */
     float scale = radius_abs / (radius_abs + 0.5f * db->axle_track_mm);
     db->sum.target_deg = s0 + sum_deg;
-    db->diff.target_deg = d0 + diff_deg;
-    ob_trajectory_plan_move(&db->sum.trajectory, s0, vs0, db->sum.target_deg, db->straight_speed_dps * scale,
-                            db->acceleration_dps2 * scale, db->acceleration_dps2 * scale,
-                            then == OB_THEN_CONTINUE);
+    set_limits(&db->sum, db->straight_speed_dps * scale, db->acceleration_dps2 * scale);
+    ob_trajectory_plan_move(&db->sum.trajectory, s0, vs0, db->sum.target_deg, db->sum.speed_dps,
+                            db->sum.accel_dps2, db->sum.accel_dps2, then == OB_THEN_CONTINUE);
     if (sum_deg == 0.0f) {
-        plan_passive_axis(&db->diff, d0, vd0, db->turn_acceleration_dps2);
+        plan_passive_axis(&db->diff, d0, vd0, db->turn_rate_dps, db->turn_acceleration_dps2);
     } else {
         /* Heading proportional to distance at every instant: a true circle through the ramps. */
-        ob_trajectory_scaled(&db->sum.trajectory, diff_deg / sum_deg, d0, &db->diff.trajectory);
+        float k = diff_deg / sum_deg;
+        ob_trajectory_scaled(&db->sum.trajectory, k, d0, &db->diff.trajectory);
+        db->diff.target_deg = d0 + diff_deg;
+        set_limits(&db->diff, db->sum.speed_dps * fabsf(k), db->sum.accel_dps2 * fabsf(k));
     }
     db->mode = OB_DB_MOVE;
     db->then = then;
@@ -250,6 +274,8 @@ static void plan_speed_ramps(ob_drivebase_t *db, float s0, float vs0, float d0, 
     float ad = ramp_s > 0.0f && fabsf(dvd) > 0.0f ? fabsf(dvd) / ramp_s : accel_dps2;
     ob_trajectory_plan_speed(&db->sum.trajectory, s0, vs0, vs1, as);
     ob_trajectory_plan_speed(&db->diff.trajectory, d0, vd0, vd1, ad);
+    set_limits(&db->sum, vs1, as);
+    set_limits(&db->diff, vd1, ad);
 }
 
 static bool command_speeds(ob_drivebase_t *db, float vs1, float vd1) {
@@ -274,6 +300,8 @@ bool ob_drivebase_move_wheels(ob_drivebase_t *db, float left_dps, float right_dp
 
 /* Hold both axes where the robot is now (measured), keeping the integrators. */
 static void hold_here(ob_drivebase_t *db) {
+    set_limits(&db->sum, db->straight_speed_dps, db->acceleration_dps2);
+    set_limits(&db->diff, db->turn_rate_dps, db->turn_acceleration_dps2);
     ob_trajectory_plan_hold(&db->sum.trajectory, db->sum_deg);
     ob_trajectory_plan_hold(&db->diff.trajectory, db->diff_deg);
     db->sum.target_deg = db->sum_deg;
@@ -464,17 +492,37 @@ static bool needs_landing(const ob_drivebase_t *db) {
 }
 
 /*
- * Close a residual left when a profile expired (the robot was held back,
- * pushed, or lagged) with a fresh profile from where it really is, under the
- * same speed and acceleration limits as any move: never a feedback step.
+ * Landing: re-plan the rest of the current command from where the robot
+ * really is (position and speed), under the command's own speed and
+ * acceleration limits. It closes a residual left when a profile expired
+ * (the robot was held back or pushed), and it takes over when a pinned robot
+ * is released, so the robot never lunges at a reference that ran or waited
+ * elsewhere: no feedback step, ever.
  */
+static void plan_axis_landing(ob_drivebase_axis_t *axis, float x_deg, float v_dps, bool end_at_cruise) {
+    ob_trajectory_plan_move(&axis->trajectory, x_deg, v_dps, axis->target_deg, axis->speed_dps, axis->accel_dps2,
+                            axis->accel_dps2, end_at_cruise);
+}
+
 static void plan_landing(ob_drivebase_t *db) {
-    ob_trajectory_plan_move(&db->sum.trajectory, db->sum_deg, db->sum_dps, db->sum.target_deg,
-                            db->straight_speed_dps, db->acceleration_dps2, db->acceleration_dps2, false);
-    ob_trajectory_plan_move(&db->diff.trajectory, db->diff_deg, db->diff_dps, db->diff.target_deg,
-                            db->turn_rate_dps, db->turn_acceleration_dps2, db->turn_acceleration_dps2, false);
+    switch (db->mode) {
+    case OB_DB_SPEED:
+        plan_speed_ramps(db, db->sum_deg, db->sum_dps, db->diff_deg, db->diff_dps, db->sum.speed_dps,
+                         db->diff.speed_dps, db->acceleration_dps2);
+        break;
+    case OB_DB_STOPPING:
+        plan_speed_ramps(db, db->sum_deg, db->sum_dps, db->diff_deg, db->diff_dps, 0.0f, 0.0f,
+                         db->acceleration_dps2);
+        break;
+    default:
+        /* Moves and hold: back onto the targets (a continue move keeps its cruise at the end). */
+        plan_axis_landing(&db->sum, db->sum_deg, db->sum_dps, db->mode == OB_DB_MOVE && db->then == OB_THEN_CONTINUE);
+        plan_axis_landing(&db->diff, db->diff_deg, db->diff_dps, false);
+        break;
+    }
     db->start_ms = db->now_ms;
     db->settling = false;
+    db->pinned_ms = 0;
     db->landings++;
 }
 
@@ -561,6 +609,9 @@ static void integrate(ob_drivebase_axis_t *axis, float error_deg, float clipped_
 }
 
 static void control(ob_drivebase_t *db, bool fresh, uint32_t dt_ms) {
+    if (db->pinned_ms >= OB_DB_PINNED_MIN_MS && fabsf(db->sum_dps) + fabsf(db->diff_dps) > OB_DB_RELEASE_DPS) {
+        plan_landing(db); /* released: carry on from here rather than lunge at the paused reference */
+    }
     ob_trajectory_sample_t rs, rd;
     float t = elapsed_s(db);
     float dt_s = fminf((float)dt_ms * 0.001f, OB_DB_MAX_DT_S);
@@ -588,6 +639,11 @@ static void control(ob_drivebase_t *db, bool fresh, uint32_t dt_ms) {
     bool pinned = ((us - us_sat) * es > 0.0f && fabsf(es) > lag) || ((ud - ud_sat) * ed > 0.0f && fabsf(ed) > lag);
     if (pinned) {
         db->start_ms += dt_ms;
+        db->pinned_ms += dt_ms;
+    } else if (db->pinned_ms >= OB_DB_PINNED_MIN_MS) {
+        plan_landing(db);
+    } else {
+        db->pinned_ms = 0;
     }
     set_output(db, false, us_sat + ud_sat, us_sat - ud_sat);
 }

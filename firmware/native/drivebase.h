@@ -73,12 +73,18 @@ typedef struct {
     float pause_lag_deg;      /* an axis pinned at the duty limit this far behind pauses the trajectories */
 } ob_drivebase_tolerances_t;
 
-/* One axis: its trajectory, controller state and the target of a positional move. */
+/*
+ * One axis: its trajectory, controller state, and what the current command
+ * asked of it, so that a landing can re-plan the rest of the command from
+ * wherever the robot really is.
+ */
 typedef struct {
     ob_trajectory_t trajectory;
     ob_drivebase_gains_t gains;
     float integral_deg_s;
-    float target_deg;
+    float target_deg;         /* positional commands: where this axis ends */
+    float speed_dps;          /* positional: cruise speed (magnitude); speed commands: the speed to keep */
+    float accel_dps2;         /* acceleration of the command on this axis */
 } ob_drivebase_axis_t;
 
 typedef enum {
@@ -163,7 +169,8 @@ typedef struct {
     ob_then_t then;
     bool done;
     bool settling;            /* the move's profile expired; waiting for the tolerances */
-    uint32_t landings;        /* landing trajectories planned for the current move */
+    uint32_t landings;        /* landing trajectories planned for the current command */
+    uint32_t pinned_ms;       /* how long the trajectories have been paused for a robot that cannot follow */
     uint32_t start_ms;        /* clock at which the current trajectories start */
     uint32_t now_ms;
     bool clock_started;
