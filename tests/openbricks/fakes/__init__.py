@@ -17,9 +17,10 @@ def install():
     sys.modules["esp32"] = esp32
     sys.modules["time"] = clock
     if not _IS_MICROPYTHON:
-        from . import micropython
+        from . import framebuf, micropython
 
         sys.modules["micropython"] = micropython
+        sys.modules["framebuf"] = framebuf  # built into MicroPython
         try:
             import openbricks_native
 
