@@ -82,7 +82,8 @@ class QTRReading:
         return [e.value for e in self.elements]
 
     def max(self):
-        """The darkest element's value in this snapshot: the follower's off-mat phantom gate."""
+        """The highest calibrated value in this snapshot (the element most over the line): the
+        follower's off-mat phantom gate, since lifted off the mat nothing reads high."""
         return max(self.values())
 
     def dark_count(self):
