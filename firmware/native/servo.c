@@ -20,7 +20,7 @@ void ob_servo_config_default(ob_servo_config_t *cfg) {
      * critically damped; the speed loop mirrors it, with the position error
      * as the speed integral. */
     cfg->kp_pct_per_deg = 9.0f;
-    cfg->ki_pct_per_deg_s = 60.0f;
+    cfg->ki_pct_per_deg_s = 100.0f;
     cfg->kd_pct_per_dps = 0.25f;
     cfg->integral_band_deg = 5.0f;
     cfg->integral_limit_pct = 30.0f;

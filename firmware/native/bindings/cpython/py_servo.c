@@ -193,14 +193,12 @@ static int set_one(ob_servo_config_t *cfg, const setting_t *setting, PyObject *v
         return -1;
     }
     bool low = setting->min_open ? !(number > setting->min) : number < setting->min;
-    if (low) {
-        PyErr_Format(PyExc_ValueError, "%s: %s must be %s %g, got %R", where, setting->name,
-                     setting->min_open ? ">" : ">=", (double)setting->min, value);
-        return -1;
-    }
-    if (number > setting->max) {
-        PyErr_Format(PyExc_ValueError, "%s: %s must be <= %g, got %R", where, setting->name, (double)setting->max,
-                     value);
+    if (low || number > setting->max) {
+        /* PyErr_Format has no %g: format the bound first. */
+        char bound[48];
+        PyOS_snprintf(bound, sizeof(bound), "%s %g", low ? (setting->min_open ? ">" : ">=") : "<=",
+                      (double)(low ? setting->min : setting->max));
+        PyErr_Format(PyExc_ValueError, "%s: %s must be %s, got %R", where, setting->name, bound, value);
         return -1;
     }
     char *field = (char *)cfg + setting->offset;
