@@ -33,9 +33,9 @@ struct DriveBaseObject {
     PyObject *write[2];
     PyObject *coast[2];
     PyObject *heading; /* callable heading source (IO mode), or NULL */
+    /* First error an IO callable raised during the current period, re-raised when it ends. */
+    PyObject *error_type, *error_value, *error_tb;
 };
-
-static const char *const side_names[2] = {"left", "right"};
 
 /* ---- then= ---------------------------------------------------------------------------------- */
 
@@ -98,27 +98,43 @@ static int positive_arg(PyObject *obj, const char *what, const char *unit, float
 /* ---- IO callables --------------------------------------------------------------------------- */
 
 /*
- * The callbacks never call Python while an exception is pending (the first
- * error of a period is kept and reported when the period ends); a read that
- * raised counts as a missing reading, which is what the watchdog is for.
+ * A callable that raises must not stop the period: the other wheel's IO still
+ * runs (above all a halt's coast must reach both motors). So the first error
+ * is stashed and re-raised when the period ends, later ones are dropped, and
+ * a read that raised counts as a missing reading, which the watchdog handles.
  */
-static bool py_read_angle(void *ctx, float *angle_deg) {
-    ob_py_wheel_slot_t *slot = ctx;
-    if (PyErr_Occurred()) {
-        return false;
+static void stash_error(DriveBaseObject *self) {
+    if (self->error_type == NULL) {
+        PyErr_Fetch(&self->error_type, &self->error_value, &self->error_tb);
+    } else {
+        PyErr_Clear();
     }
-    PyObject *r = PyObject_CallNoArgs(slot->owner->read[slot->side]);
+}
+
+/* Re-raise the stashed error, if any: returns -1 with it set. */
+static int raise_stashed(DriveBaseObject *self) {
+    if (self->error_type == NULL) {
+        return 0;
+    }
+    PyErr_Restore(self->error_type, self->error_value, self->error_tb);
+    self->error_type = self->error_value = self->error_tb = NULL;
+    return -1;
+}
+
+/* An angle from a callable's result: a number, or None for "no fresh reading". */
+static bool angle_result(DriveBaseObject *self, PyObject *r, const char *what, float *out) {
     if (r == NULL) {
+        stash_error(self);
         return false;
     }
     bool ok = false;
     if (r != Py_None) {
         double v = PyFloat_AsDouble(r);
         if (v == -1.0 && PyErr_Occurred()) {
-            PyErr_Format(PyExc_TypeError, "read_%s() must return degrees as a number or None, got %R",
-                         side_names[slot->side], r);
+            PyErr_Format(PyExc_TypeError, "%s must return degrees as a number or None, got %R", what, r);
+            stash_error(self);
         } else {
-            *angle_deg = (float)v;
+            *out = (float)v;
             ok = isfinite(v);
         }
     }
@@ -126,50 +142,45 @@ static bool py_read_angle(void *ctx, float *angle_deg) {
     return ok;
 }
 
+static bool py_read_angle(void *ctx, float *angle_deg) {
+    ob_py_wheel_slot_t *slot = ctx;
+    PyObject *r = PyObject_CallNoArgs(slot->owner->read[slot->side]);
+    return angle_result(slot->owner, r, slot->side == OB_DB_LEFT ? "read_left()" : "read_right()", angle_deg);
+}
+
 static void py_write_duty(void *ctx, float duty_pct) {
     ob_py_wheel_slot_t *slot = ctx;
-    if (PyErr_Occurred()) {
-        return;
-    }
     PyObject *arg = PyFloat_FromDouble(duty_pct);
-    if (arg == NULL) {
-        return;
+    PyObject *r = arg == NULL ? NULL : PyObject_CallOneArg(slot->owner->write[slot->side], arg);
+    Py_XDECREF(arg);
+    if (r == NULL) {
+        stash_error(slot->owner);
     }
-    PyObject *r = PyObject_CallOneArg(slot->owner->write[slot->side], arg);
-    Py_DECREF(arg);
     Py_XDECREF(r);
 }
 
 static void py_write_coast(void *ctx) {
     ob_py_wheel_slot_t *slot = ctx;
-    if (PyErr_Occurred()) {
-        return;
-    }
     PyObject *r = PyObject_CallNoArgs(slot->owner->coast[slot->side]);
+    if (r == NULL) {
+        stash_error(slot->owner);
+    }
     Py_XDECREF(r);
 }
 
 static bool py_read_heading(void *ctx, float *heading_deg) {
     DriveBaseObject *self = ctx;
-    if (PyErr_Occurred() || self->heading == NULL) {
+    if (self->heading == NULL) {
         return false;
     }
-    PyObject *r = PyObject_CallNoArgs(self->heading);
-    if (r == NULL) {
-        return false;
-    }
-    bool ok = false;
-    if (r != Py_None) {
-        double v = PyFloat_AsDouble(r);
-        if (v == -1.0 && PyErr_Occurred()) {
-            PyErr_Format(PyExc_TypeError, "heading() must return degrees as a number or None, got %R", r);
-        } else {
-            *heading_deg = (float)v;
-            ok = isfinite(v);
-        }
-    }
-    Py_DECREF(r);
-    return ok;
+    return angle_result(self, PyObject_CallNoArgs(self->heading), "heading()", heading_deg);
+}
+
+/* motor_process's native entry: one period through the IO callables. */
+static void py_drivebase_tick(void *ctx, uint32_t now_ms) {
+    DriveBaseObject *self = ctx;
+    ob_drivebase_tick(&self->db, now_ms);
+    raise_stashed(self);
 }
 
 static bool has_io(const DriveBaseObject *self) {
@@ -199,6 +210,9 @@ static int DriveBase_clear(DriveBaseObject *self) {
         self->db.io[i].write_coast = NULL;
     }
     Py_CLEAR(self->heading);
+    Py_CLEAR(self->error_type);
+    Py_CLEAR(self->error_value);
+    Py_CLEAR(self->error_tb);
     return 0;
 }
 
@@ -283,8 +297,8 @@ static int DriveBase_init(DriveBaseObject *self, PyObject *args, PyObject *kwarg
     ob_drivebase_init(&self->db, &wheel_io[0], &wheel_io[1], diameter_mm, track_mm);
     self->db.watchdog_ms = watchdog_ms;
     if (given == 6) {
-        self->base.tick_fn = ob_drivebase_tick;
-        self->base.tick_ctx = &self->db;
+        self->base.tick_fn = py_drivebase_tick;
+        self->base.tick_ctx = self;
     }
     return 0;
 }
@@ -407,7 +421,7 @@ static PyObject *DriveBase_stop(DriveBaseObject *self, PyObject *args, PyObject 
         return NULL;
     }
     ob_drivebase_stop(&self->db, then);
-    if (PyErr_Occurred()) {
+    if (raise_stashed(self) < 0) {
         return NULL; /* a coast callable raised */
     }
     Py_RETURN_NONE;
@@ -599,7 +613,7 @@ static PyObject *DriveBase_tick(DriveBaseObject *self, PyObject *arg) {
     if (now_arg(arg, &now_ms) < 0) {
         return NULL;
     }
-    ob_drivebase_tick(&self->db, now_ms);
+    py_drivebase_tick(self, now_ms);
     if (PyErr_Occurred()) {
         return NULL;
     }
