@@ -1,0 +1,208 @@
+"""JGB37-520 geared DC motor with a Hall quadrature encoder, on an H-bridge channel (L298N / TB6612).
+
+Six wires: the two motor leads into the bridge, encoder Vcc/GND and channels
+A/B. The default 1320 counts per output turn is 11 pulses x 4 edges x 1:30.
+
+The closed loop runs on the native servo core (`_openbricks_native.Servo`),
+ticked by `motor_process` at 1 kHz: this class only builds the bridge and the
+encoder and hands the core three callables (read the angle, write a duty,
+release the bridge). Open-loop commands (dc, brake, coast) and the encoder
+angle work on a build without the native core; closed-loop ones need it.
+"""
+
+import time
+
+from openbricks.drivers.encoder import QuadratureEncoder
+from openbricks.drivers.l298n import L298NMotor
+from openbricks.interfaces import Motor
+from openbricks.parameters import Stop, then_name
+
+_DEFAULT_CPR = 1320
+# The core's defaults are tuned for a geared servo with 888 deg/s no-load speed; speed-proportional
+# terms are rescaled to this motor's no-load speed (a 12 V JGB37-520 1:30 on a 2S pack, ~205 RPM).
+_CORE_NO_LOAD_DPS = 888.0
+_DEFAULT_NO_LOAD_DPS = 1230.0
+_DEFAULT_KP = 0.25 * _CORE_NO_LOAD_DPS / _DEFAULT_NO_LOAD_DPS  # speed-loop gain, duty % per deg/s
+_POLL_MS = 5
+
+
+class JGB37Motor(Motor):
+    """JGB37-520 DC gear motor with quadrature encoder, closed loop on the native servo core.
+
+    `invert` flips the bridge and the encoder together (a motor mounted
+    mirror-image); `encoder_invert` flips only the encoder (one that counts
+    down while the motor turns forward). `no_load_dps` is the output speed at
+    full duty, which the feed-forward is scaled by.
+    """
+
+    def __init__(
+        self,
+        in1,
+        in2,
+        pwm,
+        encoder_a,
+        encoder_b,
+        counts_per_output_rev=_DEFAULT_CPR,
+        invert=False,
+        encoder_invert=False,
+        kp=_DEFAULT_KP,
+        no_load_dps=_DEFAULT_NO_LOAD_DPS,
+    ):
+        if counts_per_output_rev <= 0 or no_load_dps <= 0:
+            raise ValueError(
+                "counts_per_output_rev=%r and no_load_dps=%r must be > 0"
+                % (counts_per_output_rev, no_load_dps)
+            )
+        self.invert = bool(invert)
+        self.counts_per_output_rev = counts_per_output_rev
+        self.no_load_dps = no_load_dps
+        self._deg_per_count = 360.0 / counts_per_output_rev
+        self._offset_deg = 0.0
+        self._bridge = L298NMotor(in1, in2, pwm, invert=invert)
+        try:
+            self._encoder = self._make_encoder(encoder_a, encoder_b, self.invert != bool(encoder_invert))
+        except Exception:
+            self._bridge.close()
+            raise
+        self._servo = self._make_servo(kp)
+
+    def _make_encoder(self, pin_a, pin_b, invert):
+        return QuadratureEncoder(pin_a, pin_b, invert=invert, name="%s encoder" % type(self).__name__)
+
+    def _make_servo(self, kp):
+        try:
+            import _openbricks_native
+        except ImportError:
+            return None  # open-loop only on this build; closed-loop calls say so
+        servo = _openbricks_native.Servo(
+            read_angle=self._sensor_deg,
+            write_duty=self._write_duty,
+            write_coast=self._bridge.coast,
+            counts_per_rev=self.counts_per_output_rev,
+            max_speed_dps=self.no_load_dps,
+            ff_speed=100.0 / self.no_load_dps,
+            speed_kp=kp,
+        )
+        return servo
+
+    # --- the native core's IO ------------------------------------------------------
+
+    def _sensor_deg(self):
+        return self._encoder.count() * self._deg_per_count
+
+    def _write_duty(self, duty_pct):
+        # The core works in the user frame (the bridge applies `invert`); its duty 0 means "brake":
+        # the bridge shorts the winding rather than letting go.
+        if duty_pct == 0:
+            self._bridge.brake()
+        else:
+            self._bridge.dc(duty_pct)
+
+    def _native(self, method):
+        servo = self._servo
+        if servo is None:
+            raise NotImplementedError(
+                "%s.%s() needs the native servo core (_openbricks_native), which this firmware build lacks; "
+                "dc(), brake(), coast() and angle() work without it" % (type(self).__name__, method)
+            )
+        import _openbricks_native
+
+        # Idempotent; re-arms the tick after the launcher wiped the previous program's subscribers.
+        _openbricks_native.motor_process.subscribe(servo)
+        return servo
+
+    # --- Motor -------------------------------------------------------------------------
+
+    def dc(self, duty):
+        """Fixed duty -100..100, open loop (Pybricks Motor.dc). Non-blocking."""
+        duty = max(-100, min(100, duty))
+        if self._servo is not None:
+            self._servo.dc(duty)  # the core must know, or its next tick would overwrite the duty
+        else:
+            self._bridge.dc(duty)
+
+    def brake(self):
+        """Short the winding (active braking)."""
+        if self._servo is not None:
+            self._servo.brake()
+        else:
+            self._bridge.brake()
+
+    def coast(self):
+        """Release the bridge; the motor free-wheels."""
+        if self._servo is not None:
+            self._servo.coast()
+        else:
+            self._bridge.coast()
+
+    def hold(self):
+        """Hold the current angle on the position loop."""
+        self._native("hold").hold()
+
+    def angle(self):
+        """Output-shaft angle in degrees, straight from the encoder count."""
+        return self._sensor_deg() + self._offset_deg
+
+    def reset_angle(self, angle=0):
+        self._offset_deg = angle - self._sensor_deg()
+        if self._servo is not None:
+            self._servo.reset_angle(angle)
+
+    def speed(self):
+        """Measured shaft speed in deg/s (the core's encoder observer)."""
+        return self._native("speed").speed()
+
+    def stalled(self):
+        """True once the core has pushed at its duty limit (or far behind) while nearly still for 200 ms."""
+        return self._native("stalled").stalled()
+
+    def run_speed(self, deg_per_s):
+        """Hold `deg_per_s`, ramped at the core's acceleration (closed loop)."""
+        self._native("run_speed").run_speed(deg_per_s)
+
+    def run_angle(self, deg_per_s, target_angle, wait=True, accel_dps2=1500.0, then=Stop.COAST):
+        """Rotate by `target_angle` degrees (sign = direction) on a trapezoid at up to `deg_per_s`.
+
+        The core samples the profile at 1 kHz; with wait=False poll done().
+        """
+        name = then_name(then)
+        if deg_per_s == 0:
+            raise ValueError("run_angle(deg_per_s=0): the move would never finish; give a non-zero speed")
+        servo = self._native("run_angle")
+        servo.run_angle(abs(deg_per_s), target_angle, then=name, accel_dps2=accel_dps2)
+        if wait:
+            while not servo.done():
+                time.sleep_ms(_POLL_MS)
+
+    def run_target(self, speed, target_angle, then=Stop.HOLD, wait=True):
+        """Run to the absolute `target_angle` (reset_angle frame), planned by the core from its reference."""
+        name = then_name(then)
+        if speed == 0:
+            raise ValueError("run_target(speed=0): the move would never finish; give a non-zero speed")
+        servo = self._native("run_target")
+        servo.run_target(abs(speed), target_angle, then=name)
+        if wait:
+            while not servo.done():
+                time.sleep_ms(_POLL_MS)
+
+    def done(self):
+        """True unless a run_angle/run_target(wait=False) move is still on its way."""
+        return True if self._servo is None else self._servo.done()
+
+    def _duty_limit_push(self, limit_pct):
+        servo = self._native("run_until_stalled")
+        self._limit_stack = getattr(self, "_limit_stack", [])
+        self._limit_stack.append(servo.duty_limit)
+        servo.set_duty_limit(limit_pct)
+
+    def _duty_limit_pop(self):
+        self._servo.set_duty_limit(self._limit_stack.pop())
+
+    def close(self):
+        """Stop ticking, release the bridge and the encoder pins."""
+        if self._servo is not None:
+            import _openbricks_native
+
+            _openbricks_native.motor_process.unsubscribe(self._servo)
+        self._bridge.close()
+        self._encoder.close()
