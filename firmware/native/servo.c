@@ -85,6 +85,15 @@ static void apply_config(ob_servo_t *s, const ob_servo_config_t *cfg) {
                                                                                : OB_OBSERVER_DEFAULT_BETA;
 }
 
+/* Recompute the limits that would otherwise cost a division every tick. */
+static void refresh_limits(ob_servo_t *s) {
+    float ki_speed = s->cfg.speed_ki_pct_per_deg;
+    s->speed_error_max_deg = ki_speed > 0.0f ? s->duty_limit_pct / ki_speed : 0.0f;
+    float limit = s->cfg.integral_limit_pct < s->duty_limit_pct ? s->cfg.integral_limit_pct : s->duty_limit_pct;
+    float ki = s->cfg.ki_pct_per_deg_s;
+    s->integral_max_deg_s = ki > 0.0f ? limit / ki : 0.0f;
+}
+
 void ob_servo_init(ob_servo_t *s, const ob_motor_io_t *io, const ob_servo_config_t *cfg) {
     *s = (ob_servo_t){0};
     s->io = *io;
@@ -94,6 +103,7 @@ void ob_servo_init(ob_servo_t *s, const ob_motor_io_t *io, const ob_servo_config
     if (s->duty_limit_pct < 0.0f) {
         s->duty_limit_pct = 0.0f;
     }
+    refresh_limits(s);
     s->mode = OB_SERVO_COAST;
     s->coasting = true;
     s->done = true;
@@ -102,10 +112,12 @@ void ob_servo_init(ob_servo_t *s, const ob_motor_io_t *io, const ob_servo_config
 
 void ob_servo_configure(ob_servo_t *s, const ob_servo_config_t *cfg) {
     apply_config(s, cfg);
+    refresh_limits(s);
 }
 
 void ob_servo_set_duty_limit(ob_servo_t *s, float limit_pct) {
     s->duty_limit_pct = limit_pct > 100.0f ? 100.0f : (limit_pct > 0.0f ? limit_pct : 0.0f);
+    refresh_limits(s);
 }
 
 static bool closed_loop(const ob_servo_t *s) {
@@ -304,7 +316,7 @@ static float speed_control(ob_servo_t *s, float t_s) {
      * limit: a blocked motor pushes at the limit without winding up. */
     float ki = s->cfg.speed_ki_pct_per_deg;
     if (ki > 0.0f) {
-        float error_max = s->duty_limit_pct / ki;
+        float error_max = s->speed_error_max_deg;
         if (error > error_max) {
             s->ref_offset_deg -= error - error_max;
             error = error_max;
@@ -336,9 +348,7 @@ static float position_control(ob_servo_t *s, float dt_s) {
         if (steady && small && !saturated_same_way) {
             s->integral_deg_s += error * dt_s;
         }
-        float limit = s->cfg.integral_limit_pct < s->duty_limit_pct ? s->cfg.integral_limit_pct
-                                                                    : s->duty_limit_pct;
-        s->integral_deg_s = clampf(s->integral_deg_s, limit / ki);
+        s->integral_deg_s = clampf(s->integral_deg_s, s->integral_max_deg_s);
     }
     float duty = duty_pd + ki * s->integral_deg_s;
     update_stall(s, error, duty, s->now_ms);

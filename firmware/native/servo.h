@@ -130,6 +130,9 @@ typedef struct {
     uint32_t cached_dt_ms;
     float cached_dt_s;
     float cached_inv_dt;
+    /* Limits that depend only on the configuration and the duty cap. */
+    float speed_error_max_deg; /* speed runs: the position term alone reaches the duty cap here */
+    float integral_max_deg_s;  /* position loop: ki * I stays within the integral limit */
 } ob_servo_t;
 
 /* Defaults for an ST-3032-class geared servo (888 deg/s no load, ~1 N*m
