@@ -1,0 +1,125 @@
+"""Cost of one control tick of the drivebase and servo cores: in pure C, and through the host binding.
+
+The C figures come from ``native/bench_ticks.c``, compiled here with ``gcc -O2`` against the cores in
+``firmware/native`` (so they measure the sources as they are, not an installed build). The binding
+figures time a plain Python loop around the ``update()`` fast paths, loop included, as a simulator
+drives them; the full control period is one drivebase tick plus both wheels' servo ticks.
+"""
+
+from __future__ import annotations
+
+import shutil
+import statistics
+import subprocess
+import tempfile
+import time
+from pathlib import Path
+
+from benchmarks import Row
+
+REPO = Path(__file__).resolve().parent.parent
+NATIVE = REPO / "firmware" / "native"
+BENCH_SOURCE = Path(__file__).resolve().parent / "native" / "bench_ticks.c"
+CORES = ("drivebase", "trajectory", "observer", "servo")
+
+BINDING_TICKS = 200_000
+BINDING_ROUNDS = 5
+
+
+def c_ticks() -> list[Row]:
+    compiler = shutil.which("gcc") or shutil.which("cc")
+    if compiler is None:
+        raise RuntimeError("no C compiler on PATH (gcc or cc): needed for the pure-C tick benchmark")
+    with tempfile.TemporaryDirectory(prefix="ob-bench-") as tmp:
+        exe = Path(tmp) / "bench_ticks"
+        sources = [str(BENCH_SOURCE)] + [str(NATIVE / f"{core}.c") for core in CORES]
+        subprocess.run(
+            [compiler, "-std=c99", "-O2", f"-I{NATIVE}", *sources, "-lm", "-o", str(exe)],
+            check=True,
+            capture_output=True,
+            text=True,
+        )
+        out = subprocess.run([str(exe)], check=True, capture_output=True, text=True).stdout
+    rows = []
+    labels = {
+        "drivebase_tick": "C: drivebase tick",
+        "servo_tick": "C: servo tick",
+        "control_period": "C: control period (drivebase + 2 servos)",
+    }
+    for line in out.splitlines():
+        name, best, median = line.split()
+        rows.append(Row(labels[name], float(best), "ns", f"best of 7; median {float(median):.1f} ns"))
+    return rows
+
+
+def wheel_angles(n: int) -> list[float]:
+    """Encoder readings of a wheel cruising at 360 deg/s, quantised to 4096 counts per turn."""
+    step = 360.0 / 4096.0
+    return [int(i * 0.36 / step) * step for i in range(n)]
+
+
+def time_loop(loop, rounds: int = BINDING_ROUNDS) -> tuple[float, float]:
+    """Best and median ns per iteration of loop() over BINDING_TICKS iterations."""
+    loop()  # warm-up
+    per_tick = []
+    for _ in range(rounds):
+        start = time.perf_counter_ns()
+        loop()
+        per_tick.append((time.perf_counter_ns() - start) / BINDING_TICKS)
+    return min(per_tick), statistics.median(per_tick)
+
+
+def binding_ticks() -> list[Row]:
+    import openbricks_native as native
+
+    angles = wheel_angles(BINDING_TICKS)
+
+    def fresh():
+        db = native.DriveBase(56.0, 114.0)
+        db.settings(straight_speed=360.0)
+        db.drive(360.0 * 3.14159265 * 56.0 / 360.0, 0.0)  # a speed command never ends: every tick controls
+        left, right = native.Servo(), native.Servo()
+        left.run_speed(360.0)
+        right.run_speed(360.0)
+        return db, left, right
+
+    def drivebase_loop():
+        db, _, _ = fresh()
+        update = db.update
+        for now, angle in enumerate(angles):
+            update(now, angle, angle)
+
+    def servo_loop():
+        _, servo, _ = fresh()
+        update = servo.update
+        for now, angle in enumerate(angles):
+            update(now, angle)
+
+    def period_loop():
+        db, left, right = fresh()
+        db_update, left_update, right_update = db.update, left.update, right.update
+        for now, angle in enumerate(angles):
+            db_update(now, angle, angle)
+            left_update(now, angle)
+            right_update(now, angle)
+
+    def empty_loop():
+        for _now, _angle in enumerate(angles):
+            pass
+
+    rows = []
+    for label, loop in (
+        ("binding: DriveBase.update", drivebase_loop),
+        ("binding: Servo.update", servo_loop),
+        ("binding: control period (DriveBase + 2 Servos)", period_loop),
+        ("binding: the bare Python loop, for scale", empty_loop),
+    ):
+        best, median = time_loop(loop)
+        rows.append(
+            Row(label, best, "ns", f"best of {BINDING_ROUNDS}; median {median:.1f} ns; loop included")
+        )
+    return rows
+
+
+def run() -> list[Row]:
+    return c_ticks() + binding_ticks()
