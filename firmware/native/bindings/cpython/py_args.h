@@ -12,9 +12,19 @@
 #include "bindings.h"
 #include "ob_types.h"
 
-/* A real number (int or float, not bool), finite, as float. 0 on success. */
+/* Number-like objects other than int and float (numpy scalars, Fraction, ...)
+ * convert through __float__ / __index__; str and bool never count as numbers. */
+static inline int ob_py_is_number(PyObject *obj) {
+    if (PyFloat_Check(obj) || (PyLong_Check(obj) && !PyBool_Check(obj))) {
+        return 1;
+    }
+    PyNumberMethods *nb = Py_TYPE(obj)->tp_as_number;
+    return !PyBool_Check(obj) && nb != NULL && (nb->nb_float != NULL || nb->nb_index != NULL);
+}
+
+/* A real, finite number that fits a float. 0 on success. */
 static inline int ob_py_float(PyObject *obj, const char *where, const char *name, float *out) {
-    if (PyBool_Check(obj) || !(PyFloat_Check(obj) || PyLong_Check(obj))) {
+    if (!ob_py_is_number(obj)) {
         PyErr_Format(PyExc_TypeError, "%s: %s must be a number, not %.100s", where, name,
                      Py_TYPE(obj)->tp_name);
         return -1;
@@ -45,18 +55,30 @@ static inline int ob_py_positive_float(PyObject *obj, const char *where, const c
 
 /* A scheduler time: a non-negative int, taken modulo 2^32 like the hub's tick clock. */
 static inline int ob_py_time_ms(PyObject *obj, const char *where, uint32_t *out) {
-    if (PyBool_Check(obj) || !PyLong_Check(obj)) {
-        PyErr_Format(PyExc_TypeError, "%s: now_ms must be an int (milliseconds), not %.100s", where,
-                     Py_TYPE(obj)->tp_name);
-        return -1;
+    PyObject *index = NULL;
+    if (!PyLong_Check(obj) || PyBool_Check(obj)) {
+        /* Integer-like objects (numpy ints) via __index__; floats are refused, not truncated. */
+        PyNumberMethods *nb = Py_TYPE(obj)->tp_as_number;
+        if (PyBool_Check(obj) || nb == NULL || nb->nb_index == NULL) {
+            PyErr_Format(PyExc_TypeError, "%s: now_ms must be an int (milliseconds), not %.100s", where,
+                         Py_TYPE(obj)->tp_name);
+            return -1;
+        }
+        index = PyNumber_Index(obj);
+        if (index == NULL) {
+            return -1;
+        }
+        obj = index;
     }
     int overflow = 0;
     long long value = PyLong_AsLongLongAndOverflow(obj, &overflow);
-    if (value == -1 && PyErr_Occurred()) {
-        return -1;
-    }
-    if (overflow != 0 || value < 0) {
+    int failed = value == -1 && PyErr_Occurred();
+    if (!failed && (overflow != 0 || value < 0)) {
         PyErr_Format(PyExc_ValueError, "%s: now_ms must be within 0..2**63-1, got %R", where, obj);
+        failed = 1;
+    }
+    Py_XDECREF(index);
+    if (failed) {
         return -1;
     }
     *out = (uint32_t)value;
