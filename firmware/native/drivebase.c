@@ -418,7 +418,13 @@ void ob_drivebase_get_state(const ob_drivebase_t *db, ob_drivebase_state_t *stat
 
 /* Update the observers and the measured (sum, diff); returns true when every feedback in use was fresh. */
 static bool estimate(ob_drivebase_t *db, const ob_drivebase_feedback_t *fb, uint32_t dt_ms) {
-    float dt_s = fminf((float)dt_ms * 0.001f, OB_DB_MAX_DT_S);
+    if (dt_ms != db->cached_dt_ms) {
+        /* The period rarely changes: one division when it does, none per tick. */
+        db->cached_dt_ms = dt_ms;
+        db->cached_dt_s = fminf((float)dt_ms * 0.001f, OB_DB_MAX_DT_S);
+        db->cached_inv_dt = dt_ms > 0 ? 1.0f / db->cached_dt_s : 0.0f;
+    }
+    float dt_s = db->cached_dt_s;
     bool fresh = true;
     for (int i = 0; i < 2; i++) {
         if (fb->wheel_ok[i] && isfinite(fb->wheel_deg[i])) {
@@ -426,7 +432,7 @@ static bool estimate(ob_drivebase_t *db, const ob_drivebase_feedback_t *fb, uint
                 ob_observer_reset(&db->observer[i], fb->wheel_deg[i]);
                 db->wheel_seen[i] = true;
             } else if (dt_ms > 0) {
-                ob_observer_update(&db->observer[i], fb->wheel_deg[i], dt_s);
+                ob_observer_update_inv(&db->observer[i], fb->wheel_deg[i], dt_s, db->cached_inv_dt);
             }
             db->wheel_last_ms[i] = db->now_ms;
         } else {
@@ -614,7 +620,7 @@ static void control(ob_drivebase_t *db, bool fresh, uint32_t dt_ms) {
     }
     ob_trajectory_sample_t rs, rd;
     float t = elapsed_s(db);
-    float dt_s = fminf((float)dt_ms * 0.001f, OB_DB_MAX_DT_S);
+    float dt_s = db->cached_dt_s;
     ob_trajectory_sample(&db->sum.trajectory, t, &rs);
     ob_trajectory_sample(&db->diff.trajectory, t, &rd);
     float es = rs.x_deg - db->sum_deg;

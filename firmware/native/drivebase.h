@@ -176,6 +176,9 @@ typedef struct {
     bool clock_started;
     uint8_t fault;
     ob_drivebase_output_t output;
+    uint32_t cached_dt_ms;    /* tick spacing the two values below were computed for */
+    float cached_dt_s;
+    float cached_inv_dt;
 } ob_drivebase_t;
 
 /* Gains that suit a small geared DC motor or serial-bus servo in duty mode at 1 kHz. */

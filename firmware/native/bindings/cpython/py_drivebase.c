@@ -6,6 +6,9 @@
  *     no fresh reading, write_left/right(duty_pct), coast_left/right()): the
  *     object is then a native motor_process subscriber, and tick(now_ms)
  *     runs one period through them;
+ *   - native IO (left_io=, right_io=: MotorIO-derived objects, py_motor_io.h,
+ *     e.g. the simulator's wheels): a native subscriber too, with no Python
+ *     call per tick;
  *   - no callables: the caller owns the loop and calls
  *     update(now_ms, left_deg, right_deg[, heading_deg]) -> (left, right),
  *     each a duty percent or None for a released (coasting) wheel. This path
@@ -15,6 +18,7 @@
 
 #include "bindings.h"
 #include "drivebase.h"
+#include "py_motor_io.h"
 #include "py_subscriber.h"
 
 typedef struct DriveBaseObject DriveBaseObject;
@@ -33,6 +37,7 @@ struct DriveBaseObject {
     PyObject *write[2];
     PyObject *coast[2];
     PyObject *heading; /* callable heading source (IO mode), or NULL */
+    PyObject *native_io[2]; /* MotorIO providers (left_io=, right_io=), or NULL */
     /* First error an IO callable raised during the current period, re-raised when it ends. */
     PyObject *error_type, *error_value, *error_tb;
 };
@@ -184,7 +189,7 @@ static void py_drivebase_tick(void *ctx, uint32_t now_ms) {
 }
 
 static bool has_io(const DriveBaseObject *self) {
-    return self->read[0] != NULL;
+    return self->read[0] != NULL || self->native_io[0] != NULL;
 }
 
 /* ---- type ----------------------------------------------------------------------------------- */
@@ -194,6 +199,7 @@ static int DriveBase_traverse(DriveBaseObject *self, visitproc visit, void *arg)
         Py_VISIT(self->read[i]);
         Py_VISIT(self->write[i]);
         Py_VISIT(self->coast[i]);
+        Py_VISIT(self->native_io[i]);
     }
     Py_VISIT(self->heading);
     return 0;
@@ -205,6 +211,7 @@ static int DriveBase_clear(DriveBaseObject *self) {
         Py_CLEAR(self->read[i]);
         Py_CLEAR(self->write[i]);
         Py_CLEAR(self->coast[i]);
+        Py_CLEAR(self->native_io[i]);
         self->db.io[i].read_angle = NULL;
         self->db.io[i].write_duty = NULL;
         self->db.io[i].write_coast = NULL;
@@ -224,13 +231,16 @@ static void DriveBase_dealloc(DriveBaseObject *self) {
 
 static int DriveBase_init(DriveBaseObject *self, PyObject *args, PyObject *kwargs) {
     static char *kwlist[] = {"wheel_diameter_mm", "axle_track_mm", "read_left", "read_right", "write_left",
-                             "write_right", "coast_left", "coast_right", "heading", "watchdog_ms", NULL};
+                             "write_right", "coast_left", "coast_right", "heading", "watchdog_ms",
+                             "left_io", "right_io", NULL};
     PyObject *diameter_obj, *track_obj;
     PyObject *io[6] = {NULL, NULL, NULL, NULL, NULL, NULL};
+    PyObject *native[2] = {NULL, NULL};
     PyObject *heading = NULL;
     unsigned int watchdog_ms = OB_DB_DEFAULT_WATCHDOG_MS;
-    if (!PyArg_ParseTupleAndKeywords(args, kwargs, "OO|$OOOOOOOI:DriveBase", kwlist, &diameter_obj, &track_obj,
-                                     &io[0], &io[1], &io[2], &io[3], &io[4], &io[5], &heading, &watchdog_ms)) {
+    if (!PyArg_ParseTupleAndKeywords(args, kwargs, "OO|$OOOOOOOIOO:DriveBase", kwlist, &diameter_obj, &track_obj,
+                                     &io[0], &io[1], &io[2], &io[3], &io[4], &io[5], &heading, &watchdog_ms,
+                                     &native[0], &native[1])) {
         return -1;
     }
     float diameter_mm, track_mm;
@@ -269,6 +279,34 @@ static int DriveBase_init(DriveBaseObject *self, PyObject *args, PyObject *kwarg
             }
         }
     }
+    int native_given = 0;
+    for (int i = 0; i < 2; i++) {
+        if (native[i] == Py_None) {
+            native[i] = NULL;
+        }
+        if (native[i] == NULL) {
+            continue;
+        }
+        native_given++;
+        if (!ob_py_motor_io_check(native[i])) {
+            PyErr_Format(PyExc_TypeError,
+                         "DriveBase(): %s_io must be a native motor IO (an openbricks_native.MotorIO subclass "
+                         "such as the simulator's wheel IO), got %R",
+                         i == 0 ? "left" : "right", native[i]);
+            return -1;
+        }
+        if (!ob_py_motor_io_ready(native[i])) {
+            PyErr_Format(PyExc_ValueError, "DriveBase(): %s_io has no IO functions set (a bare MotorIO object)",
+                         i == 0 ? "left" : "right");
+            return -1;
+        }
+    }
+    if (native_given == 1 || (native_given == 2 && given != 0)) {
+        PyErr_SetString(PyExc_TypeError,
+                        "DriveBase(): give both left_io and right_io (native wheel IO), or the six IO callables, "
+                        "not a mix");
+        return -1;
+    }
     if (heading == Py_None) {
         heading = NULL;
     }
@@ -293,10 +331,16 @@ static int DriveBase_init(DriveBaseObject *self, PyObject *args, PyObject *kwarg
             wheel_io[i].ctx = &self->slots[i];
         }
     }
+    if (native_given == 2) {
+        for (int i = 0; i < 2; i++) {
+            self->native_io[i] = Py_NewRef(native[i]);
+            wheel_io[i] = ((ob_py_motor_io_t *)native[i])->io;
+        }
+    }
     self->heading = Py_XNewRef(heading);
     ob_drivebase_init(&self->db, &wheel_io[0], &wheel_io[1], diameter_mm, track_mm);
     self->db.watchdog_ms = watchdog_ms;
-    if (given == 6) {
+    if (given == 6 || native_given == 2) {
         self->base.tick_fn = py_drivebase_tick;
         self->base.tick_ctx = self;
     }
@@ -536,6 +580,13 @@ static int now_arg(PyObject *obj, uint32_t *now_ms) {
 
 /* A reading for update(): a number, or None for "no fresh reading this period". */
 static int reading_arg(PyObject *obj, const char *what, bool *ok, float *value) {
+    if (PyFloat_CheckExact(obj)) {
+        /* The simulator's per-step call: skip the generic conversion. */
+        double v = PyFloat_AS_DOUBLE(obj);
+        *ok = isfinite(v);
+        *value = (float)v;
+        return 0;
+    }
     if (obj == Py_None) {
         *ok = false;
         *value = 0.0f;
@@ -661,7 +712,7 @@ static PyTypeObject DriveBaseType = {
     PyVarObject_HEAD_INIT(NULL, 0).tp_name = "openbricks_native.DriveBase",
     .tp_doc = PyDoc_STR("DriveBase(wheel_diameter_mm, axle_track_mm, *, read_left=None, read_right=None, "
                         "write_left=None, write_right=None, coast_left=None, coast_right=None, heading=None, "
-                        "watchdog_ms=20)\n"
+                        "watchdog_ms=20, left_io=None, right_io=None)\n"
                         "Two-wheel drivebase with coupled (forward, heading) control."),
     .tp_basicsize = sizeof(DriveBaseObject),
     .tp_flags = Py_TPFLAGS_DEFAULT | Py_TPFLAGS_HAVE_GC,
