@@ -32,7 +32,6 @@ _INST_WRITE = const(0x03)
 _INST_SYNC_WRITE = const(0x83)
 _BROADCAST_ID = const(0xFE)
 
-_REG_ID = const(0x05)
 _REG_MIN_ANGLE = const(0x09)
 _REG_MODE = const(0x21)
 _REG_TORQUE_ENABLE = const(0x28)
@@ -48,7 +47,7 @@ _MODE_DUTY = const(2)
 _MODE_STEP = const(3)
 
 COUNTS_PER_REV = const(4096)
-_COUNTS_PER_DEG = 4096 / 360
+_COUNTS_PER_DEG = COUNTS_PER_REV / 360
 _DEFAULT_STEPS_PER_DPS = 4096 / 360  # goal/present speed registers count encoder steps per second
 # Present position in multi-turn modes is a sign-magnitude +-32767 window that wraps.
 _MULTI_TURN_SPAN = const(65535)
