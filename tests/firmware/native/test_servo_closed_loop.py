@@ -341,6 +341,13 @@ class TestValidation:
         with pytest.raises(TypeError, match="give all of read_angle, write_duty and write_coast"):
             Servo(read_angle=lambda: 0.0)
 
+    def test_numpy_scalars_are_numbers_but_float_times_are_not(self):
+        servo = Servo()
+        servo.update(np.int64(1), np.float32(1.5))
+        assert servo.angle() == 1.5
+        with pytest.raises(TypeError, match="now_ms must be an int"):
+            servo.update(2.0, 1.5)
+
     def test_settings_round_trip(self):
         servo = Servo(kp=5.0, stall_time_ms=150)
         values = servo.settings()
