@@ -19,7 +19,7 @@ typedef int (*ob_py_adder_t)(PyObject *);
 
 static const ob_py_adder_t ob_py_adders[] = {
     ob_py_add_trajectory, ob_py_add_observer, ob_py_add_scheduler, ob_py_add_servo,
-    ob_py_add_drivebase,  ob_py_add_scs,      ob_py_add_imu_yaw,
+    ob_py_add_drivebase,  ob_py_add_scs,      ob_py_add_imu_yaw,   ob_py_add_capi,
 };
 
 PyMODINIT_FUNC PyInit_openbricks_native(void) {

@@ -15,6 +15,7 @@
 
 #include "bindings.h"
 #include "py_args.h"
+#include "py_capi.h"
 #include "py_subscriber.h"
 #include "scheduler.h"
 
@@ -178,11 +179,16 @@ static PyObject *mp_is_subscribed(MotorProcessObject *self, PyObject *obj) {
     return PyBool_FromLong(find_slot(self, obj) != NULL);
 }
 
-static PyObject *mp_tick(MotorProcessObject *self, PyObject *arg) {
-    uint32_t now_ms;
-    if (ob_py_time_ms(arg, "motor_process.tick", &now_ms) < 0) {
-        return NULL;
+static PyTypeObject MotorProcessType;
+
+/* tick() for C callers (the simulator's physics callback, through py_capi.h): no Python frame. */
+int ob_py_motor_process_tick(PyObject *process, uint32_t now_ms) {
+    if (!PyObject_TypeCheck(process, &MotorProcessType)) {
+        PyErr_Format(PyExc_TypeError, "motor_process tick: expected a MotorProcess, not %.100s",
+                     Py_TYPE(process)->tp_name);
+        return -1;
     }
+    MotorProcessObject *self = (MotorProcessObject *)process;
     /* A subscriber may tick this process re-entrantly from Python; keep the
      * outer tick's error slot intact by saving it around this round. */
     PyObject *outer_type = self->error_type, *outer_value = self->error_value, *outer_tb = self->error_tb;
@@ -194,6 +200,17 @@ static PyObject *mp_tick(MotorProcessObject *self, PyObject *arg) {
     self->error_tb = outer_tb;
     if (type != NULL) {
         PyErr_Restore(type, value, tb);
+        return -1;
+    }
+    return 0;
+}
+
+static PyObject *mp_tick(MotorProcessObject *self, PyObject *arg) {
+    uint32_t now_ms;
+    if (ob_py_time_ms(arg, "motor_process.tick", &now_ms) < 0) {
+        return NULL;
+    }
+    if (ob_py_motor_process_tick((PyObject *)self, now_ms) < 0) {
         return NULL;
     }
     Py_RETURN_NONE;

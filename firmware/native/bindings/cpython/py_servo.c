@@ -6,9 +6,12 @@
  *   the angle in degrees, or None when no fresh reading is available.
  *   Subscribe the servo to motor_process and it is ticked natively; only the
  *   IO crosses into Python.
- * - The direct path, for host loops and the simulator: Servo() with no
- *   callables, and update(now_ms, measured_deg) -> duty_pct (None while
- *   coasting) runs one control step with no Python call at all.
+ * - The direct path, for host loops: Servo() with no callables, and
+ *   update(now_ms, measured_deg) -> duty_pct (None while coasting) runs one
+ *   control step with no Python call at all.
+ * - Native IO, for the simulator's wheels: Servo(io=provider) with a
+ *   MotorIO-derived object (py_motor_io.h); motor_process then ticks it with
+ *   no Python call at all.
  *
  * Exceptions raised by the IO callables cannot cross the core's C frames, so
  * they are stashed while the core runs and raised when it returns. A read
@@ -19,6 +22,7 @@
 
 #include "bindings.h"
 #include "py_args.h"
+#include "py_motor_io.h"
 #include "py_subscriber.h"
 #include "servo.h"
 
@@ -26,6 +30,7 @@ typedef struct {
     ob_py_subscriber_t base;
     ob_servo_t servo;
     PyObject *read_angle; /* NULL on the direct path */
+    PyObject *native_io;  /* MotorIO provider (io=), or NULL */
     PyObject *write_duty;
     PyObject *write_coast;
     PyObject *error_type; /* first error raised by a callable during the current call */
@@ -273,18 +278,22 @@ static int callable_or_none(PyObject *obj, const char *name) {
 }
 
 static int servo_init(ServoObject *self, PyObject *args, PyObject *kwargs) {
-    static const char *const io_names[] = {"read_angle", "write_duty", "write_coast", "duty_limit", NULL};
+    static const char *const io_names[] = {"read_angle", "write_duty", "write_coast", "duty_limit", "io", NULL};
     if (PyTuple_GET_SIZE(args) != 0) {
         PyErr_SetString(PyExc_TypeError,
                         "Servo() takes keyword arguments only: read_angle=, write_duty=, write_coast= and settings");
         return -1;
     }
-    PyObject *read = NULL, *write = NULL, *coast = NULL, *duty_limit = NULL;
+    PyObject *read = NULL, *write = NULL, *coast = NULL, *duty_limit = NULL, *native = NULL;
     if (kwargs != NULL) {
         read = PyDict_GetItemString(kwargs, "read_angle");
         write = PyDict_GetItemString(kwargs, "write_duty");
         coast = PyDict_GetItemString(kwargs, "write_coast");
         duty_limit = PyDict_GetItemString(kwargs, "duty_limit");
+        native = PyDict_GetItemString(kwargs, "io");
+    }
+    if (native == Py_None) {
+        native = NULL;
     }
     if (read == Py_None) {
         read = NULL;
@@ -300,6 +309,27 @@ static int servo_init(ServoObject *self, PyObject *args, PyObject *kwargs) {
         return -1;
     }
     int given = (read != NULL) + (write != NULL) + (coast != NULL);
+    if (native != NULL) {
+        if (given != 0) {
+            PyErr_SetString(PyExc_TypeError,
+                            "Servo: give either io= (a native motor IO) or the read_angle/write_duty/write_coast "
+                            "callables, not both");
+            return -1;
+        }
+        if (!ob_py_motor_io_check(native)) {
+            PyErr_Format(PyExc_TypeError,
+                         "Servo: io must be a native motor IO (an openbricks_native.MotorIO subclass such as "
+                         "the simulator's wheel IO), not %.100s; pass Python functions as read_angle=, "
+                         "write_duty= and write_coast= instead",
+                         Py_TYPE(native)->tp_name);
+            return -1;
+        }
+        if (!ob_py_motor_io_ready(native)) {
+            PyErr_Format(PyExc_ValueError, "Servo: io=%.100s has no IO functions set (a bare MotorIO base object)",
+                         Py_TYPE(native)->tp_name);
+            return -1;
+        }
+    }
     if (given != 0 && given != 3) {
         PyErr_SetString(PyExc_TypeError,
                         "Servo: give all of read_angle, write_duty and write_coast (a motor that is ticked "
@@ -326,12 +356,19 @@ static int servo_init(ServoObject *self, PyObject *args, PyObject *kwargs) {
     Py_XINCREF(read);
     Py_XINCREF(write);
     Py_XINCREF(coast);
+    Py_XINCREF(native);
     Py_XSETREF(self->read_angle, read);
     Py_XSETREF(self->write_duty, write);
     Py_XSETREF(self->write_coast, coast);
+    Py_XSETREF(self->native_io, native);
 
     ob_motor_io_t io;
-    if (given == 3) {
+    if (native != NULL) {
+        /* The provider's functions never call Python: tick the core directly. */
+        io = ((ob_py_motor_io_t *)native)->io;
+        self->base.tick_fn = ob_servo_tick;
+        self->base.tick_ctx = &self->servo;
+    } else if (given == 3) {
         io = (ob_motor_io_t){py_read_angle, py_write_duty, py_write_coast, self};
         self->base.tick_fn = servo_tick_fn;
         self->base.tick_ctx = self;
@@ -346,6 +383,7 @@ static int servo_init(ServoObject *self, PyObject *args, PyObject *kwargs) {
 
 static int servo_traverse(ServoObject *self, visitproc visit, void *arg) {
     Py_VISIT(self->read_angle);
+    Py_VISIT(self->native_io);
     Py_VISIT(self->write_duty);
     Py_VISIT(self->write_coast);
     Py_VISIT(self->error_type);
@@ -359,6 +397,7 @@ static int servo_clear(ServoObject *self) {
     self->base.tick_fn = NULL;
     self->servo.io = (ob_motor_io_t){direct_read_angle, direct_write_duty, direct_write_coast, self};
     Py_CLEAR(self->read_angle);
+    Py_CLEAR(self->native_io);
     Py_CLEAR(self->write_duty);
     Py_CLEAR(self->write_coast);
     Py_CLEAR(self->error_type);
@@ -538,9 +577,9 @@ static PyObject *servo_tick(ServoObject *self, PyObject *arg) {
     if (ob_py_time_ms(arg, "Servo.tick", &now_ms) < 0) {
         return NULL;
     }
-    if (self->read_angle == NULL) {
+    if (self->read_angle == NULL && self->native_io == NULL) {
         PyErr_SetString(PyExc_TypeError,
-                        "Servo.tick: this Servo has no read_angle/write_duty/write_coast callables; "
+                        "Servo.tick: this Servo has no read_angle/write_duty/write_coast callables or io; "
                         "use update(now_ms, measured_deg)");
         return NULL;
     }
@@ -724,11 +763,13 @@ static PyTypeObject ServoType = {
     .tp_name = "openbricks_native.Servo",
     .tp_basicsize = sizeof(ServoObject),
     .tp_flags = Py_TPFLAGS_DEFAULT | Py_TPFLAGS_HAVE_GC,
-    .tp_doc = "Servo(*, read_angle=None, write_duty=None, write_coast=None, duty_limit=None, **settings)\n\n"
+    .tp_doc = "Servo(*, read_angle=None, write_duty=None, write_coast=None, io=None, duty_limit=None, "
+              "**settings)\n\n"
               "Closed-loop control of one motor with an angle sensor: speed runs, position moves and hold on "
               "trapezoidal trajectories, dc, brake, coast, stall detection, and a halt when the angle goes "
-              "silent. With IO callables, subscribe it to motor_process; without, call update(). See "
-              "settings() for the gains and limits (their defaults suit an ST-3032-class geared motor).",
+              "silent. With IO callables or a native io, subscribe it to motor_process; without, call "
+              "update(). See settings() for the gains and limits (their defaults suit an ST-3032-class geared "
+              "motor).",
     .tp_new = servo_new,
     .tp_init = (initproc)servo_init,
     .tp_dealloc = (destructor)servo_dealloc,
