@@ -124,6 +124,14 @@ static bool closed_loop(const ob_servo_t *s) {
     return s->mode == OB_SERVO_SPEED || s->mode == OB_SERVO_POSITION;
 }
 
+/* Whether a new command may start from the running reference: only while
+ * the motor is really following it (not stalled, not far behind). Asked
+ * before the new command resets the status. */
+static bool following_reference(const ob_servo_t *s) {
+    float error = s->ref.x_deg + s->ref_offset_deg - s->angle_deg;
+    return closed_loop(s) && !s->needs_plan && !s->stalled && fabsf(error) < s->cfg.stall_error_deg;
+}
+
 /* Every new command forgets the previous one's integrator and status. */
 static void begin_command(ob_servo_t *s, ob_servo_mode_t mode) {
     s->mode = mode;
@@ -139,7 +147,7 @@ static void begin_command(ob_servo_t *s, ob_servo_mode_t mode) {
  * tracked (so chained commands join without a bump, and repeated run_angle
  * calls do not accumulate tracking errors), the measurement otherwise. */
 static void start_state(const ob_servo_t *s, bool was_tracking, float *x_deg, float *v_dps) {
-    if (was_tracking && !s->stalled) {
+    if (was_tracking) {
         *x_deg = s->ref.x_deg + s->ref_offset_deg;
         *v_dps = s->ref.v_dps;
     } else {
@@ -189,7 +197,7 @@ static void plan_or_defer(ob_servo_t *s, bool was_tracking) {
 /* ---- Commands. ---- */
 
 void ob_servo_run_speed(ob_servo_t *s, float speed_dps) {
-    bool was_tracking = closed_loop(s);
+    bool was_tracking = following_reference(s);
     begin_command(s, OB_SERVO_SPEED);
     s->cmd_speed_dps = capped_speed(s, speed_dps);
     s->cmd_accel_dps2 = s->cfg.accel_dps2;
@@ -198,7 +206,7 @@ void ob_servo_run_speed(ob_servo_t *s, float speed_dps) {
 
 void ob_servo_move(ob_servo_t *s, float speed_dps, float value_deg, bool relative, ob_then_t then,
                    float accel_dps2, float decel_dps2) {
-    bool was_tracking = closed_loop(s);
+    bool was_tracking = following_reference(s);
     begin_command(s, OB_SERVO_POSITION);
     s->then = then;
     s->cmd_speed_dps = capped_speed(s, speed_dps);

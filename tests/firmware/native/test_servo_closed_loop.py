@@ -207,6 +207,20 @@ class TestStall:
         rig.run(2)
         assert rig.servo.duty is None, "then='coast' applied"
 
+    def test_move_after_a_stall_starts_from_where_the_shaft_is(self):
+        rig = Rig()
+        rig.servo.run_target(300, 360, then="hold")
+        rig.run(300)
+        rig.plant.blocked = True
+        rig.run(4000, until=rig.servo.done)
+        stuck_at = rig.plant.angle_deg
+        assert stuck_at < 100.0 and rig.servo.stalled()
+        rig.servo.run_angle(300, 30, then="hold")  # relative to the shaft, not to the unreached 360
+        rig.plant.blocked = False
+        rig.run(3000, until=rig.servo.done)
+        rig.run(200)
+        assert rig.plant.angle_deg == pytest.approx(stuck_at + 30.0, abs=1.0)
+
     def test_duty_limit_caps_output_and_still_detects_the_stall(self):
         rig = Rig()
         rig.servo.set_duty_limit(25)
