@@ -269,6 +269,7 @@ class TestSilentFeedback:
         rig.run(1)
         assert rig.servo.duty is None, "coasts once silent for 20 ms"
         assert rig.servo.feedback_lost and rig.servo.done()
+        assert rig.servo.state()["silent_reads"] == 20
         rig.run(500)
         rig.silent = False
         rig.run(300)

@@ -680,9 +680,10 @@ static PyObject *servo_state(ServoObject *self, PyObject *unused) {
         return NULL;
     }
     PyObject *state = Py_BuildValue(
-        "{s:s,s:s,s:O,s:O,s:O,s:k,s:d,s:d,s:N,s:d,s:d,s:d,s:d,s:k}", "mode", mode_name(s->mode), "then",
+        "{s:s,s:s,s:O,s:O,s:O,s:k,s:k,s:d,s:d,s:N,s:d,s:d,s:d,s:d,s:k}", "mode", mode_name(s->mode), "then",
         ob_py_then_name(s->then), "done", s->done ? Py_True : Py_False, "stalled", s->stalled ? Py_True : Py_False,
         "feedback_lost", s->feedback_lost ? Py_True : Py_False, "failed_reads", (unsigned long)s->failed_reads,
+        "silent_reads", (unsigned long)s->silent_ticks,
         "angle_deg", (double)s->angle_deg, "speed_dps", (double)s->observer.v_dps, "duty_pct", duty,
         "duty_limit_pct", (double)s->duty_limit_pct, "ref_x_deg", (double)(s->ref.x_deg + s->ref_offset_deg),
         "ref_v_dps", (double)s->ref.v_dps, "ref_a_dps2", (double)s->ref.a_dps2, "now_ms", (unsigned long)s->now_ms);
