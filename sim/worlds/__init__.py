@@ -1,0 +1,77 @@
+"""The simulator's worlds: built by code from shipped files, never downloaded.
+
+`--world` takes an alias from WORLDS or a path to an MJCF file. A world
+builder returns a fresh MjSpec of the scene (floor, mat, walls, props) with
+no robot; the chassis is spliced in afterwards at the start pose the world
+suggests (or the one the user gives).
+"""
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+import mujoco
+
+from . import arena, empty, line_track, wro, zones
+from .scoring import FinalState, Scoring, final_state
+
+
+@dataclass(frozen=True)
+class World:
+    alias: str
+    description: str
+    build: Callable[[int], mujoco.MjSpec]  # seed -> scene spec
+    start_mm_deg: tuple[float, float, float] = (0.0, 0.0, 0.0)  # x, y, heading
+    score: Scoring | None = None  # FinalState -> score dict; None: the world has no mission
+
+
+WORLDS: dict[str, World] = {
+    "empty": World("empty", "a flat floor, nothing else", empty.build),
+    "line_track": World(
+        "line_track",
+        "a 20 mm black line on a 2000 x 1200 mm mat: bends, a junction and a finish bar",
+        line_track.build,
+        line_track.START_MM_DEG,
+        line_track.score,
+    ),
+    "zones": World(
+        "zones",
+        "coloured zones and a skewed black align line on a 1500 x 1000 mm mat",
+        zones.build,
+        zones.START_MM_DEG,
+        zones.score,
+    ),
+    "arena": World(
+        "arena",
+        "a 1600 x 1000 mm arena walled in 100 mm high, with a pillar: for the distance sensors",
+        arena.build,
+        arena.START_MM_DEG,
+        arena.score,
+    ),
+    "wro": World(
+        "wro",
+        "a WRO-size 2362 x 1143 mm competition table: printed mat, walls, 12 blocks shuffled by the seed",
+        wro.build,
+        wro.START_MM_DEG,
+        wro.score,
+    ),
+}
+
+__all__ = ["WORLDS", "FinalState", "Scoring", "UnknownWorldError", "World", "final_state", "resolve"]
+
+
+class UnknownWorldError(ValueError):
+    pass
+
+
+def resolve(name_or_path: str) -> World:
+    """An alias from WORLDS, or an MJCF file (its own floor and props; start at the origin)."""
+    if name_or_path in WORLDS:
+        return WORLDS[name_or_path]
+    path = Path(name_or_path)
+    if path.suffix.lower() == ".xml" or path.exists():
+        if not path.is_file():
+            raise UnknownWorldError(f"world file {path} does not exist")
+        return World(path.stem, f"MJCF file {path}", lambda _seed: mujoco.MjSpec.from_file(str(path)))
+    known = ", ".join(sorted(WORLDS))
+    raise UnknownWorldError(f"unknown world {name_or_path!r}: use one of {known}, or a path to an MJCF file")

@@ -1,0 +1,61 @@
+"""A zones mat: coloured areas on a white 1500 x 1000 mm mat, and a black line to align on.
+
+The robot starts at the left facing +x. Straight ahead, past a slightly skewed
+black line (the square-up exercise for the QTR bar or two colour sensors),
+lies the red zone, flanked by green and blue; yellow and black sit midfield
+above and below the robot's path. Scoring names the zone the robot's centre
+ends in.
+"""
+
+import mujoco
+
+from .canvas import BLACK, BLUE, GREEN, RED, WHITE, YELLOW, MatCanvas
+from .scene import new_scene
+from .scoring import FinalState
+from .table import add_floor, add_mat
+
+MAT_MM = (1500.0, 1000.0)
+START_MM_DEG = (-500.0, 0.0, 0.0)
+
+# name -> (x0, y0, x1, y1, colour), mat millimetres.
+ZONES = {
+    "red": (300.0, -120.0, 700.0, 120.0, RED),
+    "green": (300.0, 160.0, 700.0, 450.0, GREEN),
+    "blue": (300.0, -450.0, 700.0, -160.0, BLUE),
+    "yellow": (-150.0, 250.0, 150.0, 450.0, YELLOW),
+    "black": (-150.0, -450.0, 150.0, -250.0, BLACK),
+}
+# The align line crosses the robot's path about 250 mm ahead of the colour sensors, skewed by
+# about 6 degrees so that squaring up on it is a visible correction.
+ALIGN_LINE_MM = ((-210.0, -300.0), (-150.0, 300.0))
+ALIGN_LINE_WIDTH_MM = 25.0
+
+
+def draw(px_per_mm: float = 1.0) -> MatCanvas:
+    canvas = MatCanvas(*MAT_MM, px_per_mm=px_per_mm, background=WHITE)
+    for x0, y0, x1, y1, rgb in ZONES.values():
+        canvas.fill_rect(x0, y0, x1, y1, rgb)
+    canvas.stroke_path(ALIGN_LINE_MM, ALIGN_LINE_WIDTH_MM, BLACK)
+    return canvas
+
+
+def build(seed: int = 0) -> mujoco.MjSpec:
+    """A fixed layout: every seed gives the same mat."""
+    spec = new_scene("zones")
+    add_floor(spec)
+    add_mat(spec, draw())
+    return spec
+
+
+def zone_at(x_mm: float, y_mm: float) -> str | None:
+    for name, (x0, y0, x1, y1, _rgb) in ZONES.items():
+        if x0 <= x_mm <= x1 and y0 <= y_mm <= y1:
+            return name
+    return None
+
+
+def score(state: FinalState) -> dict:
+    """The zone under the robot's centre at the end (None: on white mat or off it)."""
+    if state.robot is None:
+        return {"zone": None}
+    return {"zone": zone_at(state.robot.x_mm, state.robot.y_mm)}
