@@ -8,8 +8,17 @@ import numpy as np
 import pytest
 
 from openbricks_sim.chassis import CHASSIS, ROBOT_BODY, add_chassis
-from openbricks_sim.worlds import WORLDS, FinalState, UnknownWorldError, final_state, resolve
-from openbricks_sim.worlds import arena, line_track, wro, zones
+from openbricks_sim.worlds import (
+    WORLDS,
+    FinalState,
+    UnknownWorldError,
+    arena,
+    final_state,
+    line_track,
+    resolve,
+    wro,
+    zones,
+)
 from openbricks_sim.worlds.scoring import Pose
 
 MISSION_WORLDS = ("line_track", "zones", "arena", "wro")
