@@ -1,0 +1,424 @@
+"""Program launcher: the program button starts and stops the staged program; every run is logged.
+
+Button semantics (one GPIO, every press means start-or-stop):
+
+- idle: a full press-release starts the program, on release, unless a stop happened less than
+  START_LOCKOUT_MS ago (the bounce of the stopping press must not restart the robot);
+- running: the stop fires on press-down. The e-stop latch engages first (motors halt, motion
+  commands raise), then a KeyboardInterrupt is injected and re-injected every STOP_RETRY_MS until the
+  program is actually dead: a user `try/except` may swallow one, and on the ESP32 a timer callback
+  can only ask for the interrupt, not deliver it.
+
+The watcher is a `machine.Timer` callback that lives for the whole uptime (never deinit'ed), so it
+keeps running when a host session interrupts the idle loop. On the ESP32 that callback runs from the
+MicroPython scheduler, between the main thread's bytecodes. That has two consequences for the design:
+
+- the program itself always runs in the main thread, never inside the callback: a callback holds
+  the scheduler lock, so a program started there would freeze every timer (the motor control tick,
+  the log pump and this very stop button) for its whole run. The callback only sets a flag that the
+  idle loop (`run()` / `Launcher.idle()`) picks up. While a host console session holds the main
+  thread, a start press is refused with a console message instead; the host hands the hub back to
+  the idle loop when it disconnects (`host_calls.idle()`).
+- an exception raised in a scheduled callback is caught and printed by MicroPython, it never reaches
+  the program. So the interrupt is requested through the firmware's native hook
+  (`_openbricks_native.interrupt_main`, the same C path Ctrl-C takes) when the build has it. Without
+  it the tick raises KeyboardInterrupt itself, which unwinds the program wherever timer callbacks run
+  inline in the main thread (the simulator's virtual clock, the test fakes); on such a firmware the
+  e-stop latch is what ends the program, at its next wait() or motion command.
+
+Log framing, one stamped line each, committed immediately:
+`started: <trigger> | firmware <label> | program <path> | uptime N ms | free N B`,
+`button pressed -> stop`, `estop engaged`, then one of `stopped: finished after N ms`,
+`stopped: KeyboardInterrupt (N ms after press, M retries)`, `stopped: KeyboardInterrupt (Ctrl-C from
+the console)`, or the full traceback followed by `stopped: <Exception>: <message> after N ms`.
+"""
+
+import gc
+import io
+import os
+import sys
+import time
+
+import machine
+
+import openbricks
+from openbricks import estop, log, pins
+
+DEFAULT_PROGRAM_PATH = "/program.mpy"
+DEFAULT_BUTTON_PIN = 39
+DEFAULT_POLL_MS = 50
+DEFAULT_TIMER_ID = 0
+
+DEBOUNCE_TICKS = 2  # a level must hold this many polls in a row to count as a press or release
+START_LOCKOUT_MS = 500  # after a stop, presses are ignored this long (the stopping press bounces)
+RUN_START_GRACE_MS = 400  # a press this soon after a start is the starting press's chatter
+STOP_RETRY_MS = 300  # the interrupt is re-requested this often until the program is dead
+STARVE_NOTE_MS = 5000  # a gap this long between ticks is worth a line in the run log
+
+_running = [False]  # hub-wide "a program is running", read by the status LED on every tick
+_listeners = []
+_launcher = [None]
+
+
+def program_running():
+    """True while a user program is executing, whatever started it. One read, no allocation."""
+    return _running[0]
+
+
+def add_listener(callback):
+    """Call `callback(running)` on every program start (True) and end (False)."""
+    if callback not in _listeners:
+        _listeners.append(callback)
+
+
+def remove_listener(callback):
+    if callback in _listeners:
+        _listeners.remove(callback)
+
+
+def _set_running(running):
+    if _running[0] == running:
+        return
+    _running[0] = running
+    for callback in tuple(_listeners):
+        try:
+            callback(running)
+        except Exception as exc:  # noqa: BLE001 - an LED listener must never break a run
+            print("launcher: running listener failed: %r" % (exc,))
+
+
+def _raise_interrupt():
+    raise KeyboardInterrupt
+
+
+def _native_interrupt():
+    """The firmware's C hook that raises KeyboardInterrupt in the main thread, or None."""
+    try:
+        import _openbricks_native
+    except ImportError:
+        return None
+    return getattr(_openbricks_native, "interrupt_main", None)
+
+
+def _native_wipe():
+    """Drop the finished program's controllers from the native scheduler, if this build has one."""
+    try:
+        import _openbricks_native
+    except ImportError:
+        return
+    process = getattr(_openbricks_native, "motor_process", None)
+    reset = getattr(process, "reset", None)
+    if reset is not None:
+        reset()
+
+
+def traceback_text(exc):
+    """The full traceback of `exc` as text, on MicroPython and on CPython (the simulator)."""
+    buf = io.StringIO()
+    if hasattr(sys, "print_exception"):
+        sys.print_exception(exc, buf)
+    else:
+        import traceback  # CPython only: the simulator's runtime
+
+        traceback.print_exception(type(exc), exc, exc.__traceback__, file=buf)
+    return buf.getvalue()
+
+
+def _exception_line(exc):
+    text = str(exc)
+    return type(exc).__name__ + (": " + text if text else "")
+
+
+def resolve_program(path=DEFAULT_PROGRAM_PATH):
+    """The staged program to run: `path`, or its `.py`/`.mpy` sibling when only that one exists."""
+    candidates = (path,)
+    if path.endswith(".mpy"):
+        candidates = (path, path[:-4] + ".py")
+    elif path.endswith(".py"):
+        candidates = (path, path[:-3] + ".mpy")
+    for candidate in candidates:
+        try:
+            os.stat(candidate)
+            return candidate
+        except OSError:
+            pass
+    raise OSError(2, "no program staged at %s: upload one with `openbricks upload` or `run`" % path)
+
+
+def _execute(path):
+    """Run the program file in this thread with print teed into the run log."""
+    user_modules = set(sys.modules)
+    saved_print = None
+    try:
+        import builtins
+
+        saved_print = builtins.print
+        builtins.print = log.tee_print
+    except (ImportError, AttributeError):
+        saved_print = None  # a port without overridable builtins: the namespace injection below
+    try:
+        if path.endswith(".py"):
+            with open(path) as f:
+                code = compile(f.read(), path, "exec")
+            exec(code, {"__name__": "__main__", "__file__": path, "print": log.tee_print})
+        else:
+            # Bytecode (.mpy) can only be loaded through import; the module runs as `program`.
+            cut = path.rfind("/")
+            directory = path[:cut] if cut > 0 else "/"
+            name = path[cut + 1 : path.rfind(".")]
+            sys.path.insert(0, directory)
+            try:
+                __import__(name)
+            finally:
+                sys.path.remove(directory)
+    finally:
+        if saved_print is not None:
+            import builtins
+
+            builtins.print = saved_print
+        # Modules the program imported are its own: a re-uploaded helper must load fresh next run.
+        for name in tuple(sys.modules):
+            if name not in user_modules and not name.startswith("openbricks"):
+                del sys.modules[name]
+
+
+class Launcher:
+    """The program-button watcher and the run wrapper; one per hub (see `get()`)."""
+
+    def __init__(
+        self,
+        button_pin=DEFAULT_BUTTON_PIN,
+        program_path=DEFAULT_PROGRAM_PATH,
+        poll_ms=DEFAULT_POLL_MS,
+        log_dir=log.LOG_DIR,
+        interrupt=None,
+    ):
+        pins.claim(
+            button_pin,
+            "program button",
+            "launcher",
+            output=False,
+            hint="pass button_pin= to launcher.run() to move the program button",
+        )
+        # Input with pull-up, pressed = 0. The classic ESP32's GPIO 34-39 have no internal pull-up:
+        # wire an external 10 kOhm one there.
+        self._button = machine.Pin(button_pin, machine.Pin.IN, machine.Pin.PULL_UP)
+        self.button_pin = button_pin
+        self.program_path = program_path
+        self.poll_ms = poll_ms
+        self.log_dir = log_dir
+        self._interrupt = interrupt or _native_interrupt() or _raise_interrupt
+        self._timer = None
+        self._idling = False
+        self._start_requested = False
+        self._down = False  # debounced button level
+        self._flips = 0  # consecutive polls that disagreed with the debounced level
+        self._press_stops = False  # the press being held began as a stop (its release must not start)
+        self._lockout_until_ms = None
+        self._started_ms = None
+        self._stop_pressed_ms = None  # when the stop press landed, for the stopped: line
+        self._last_attempt_ms = None
+        self._stop_retries = 0
+        self._last_tick_ms = None
+
+    # -- the watcher (timer callback context) ------------------------------------------------
+
+    def start_watcher(self, timer_id=DEFAULT_TIMER_ID):
+        """Poll the button from a periodic hardware timer, for the rest of the uptime."""
+        self._timer = machine.Timer(timer_id)
+        self._timer.init(mode=machine.Timer.PERIODIC, period=self.poll_ms, callback=self._on_timer)
+
+    def _on_timer(self, _timer):
+        self._tick()
+
+    def _tick(self):
+        """One poll: pump the log, debounce the button, act on edges, retry a pending stop.
+
+        Runs in the scheduler: it must never raise, except the deliberate KeyboardInterrupt.
+        """
+        now = time.ticks_ms()
+        interrupt = False
+        try:
+            if self._last_tick_ms is not None and _running[0]:
+                gap = time.ticks_diff(now, self._last_tick_ms)
+                if gap >= STARVE_NOTE_MS:
+                    log.note(
+                        "watcher tick starved for %d ms (slowest log write %d ms)"
+                        % (gap, log.worst_write_ms())
+                    )
+            self._last_tick_ms = now
+            log.pump()
+            down = self._button.value() == 0
+            if down == self._down:
+                self._flips = 0
+            else:
+                self._flips += 1
+                if self._flips >= DEBOUNCE_TICKS:
+                    self._flips = 0
+                    self._down = down
+                    interrupt = self._on_press(now) if down else self._on_release(now)
+            if not interrupt and _running[0] and self._stop_pressed_ms is not None:
+                if time.ticks_diff(now, self._last_attempt_ms) >= STOP_RETRY_MS:
+                    self._stop_retries += 1
+                    self._last_attempt_ms = now
+                    interrupt = True
+        except Exception as exc:  # noqa: BLE001 - the stop button must survive any one bad tick
+            print("launcher: watcher tick failed: %r" % (exc,))
+        if interrupt:
+            self._interrupt()
+
+    def _locked_out(self, now):
+        return self._lockout_until_ms is not None and time.ticks_diff(self._lockout_until_ms, now) > 0
+
+    def _on_press(self, now):
+        """Debounced press-down; returns True when the program must be interrupted now."""
+        self._press_stops = _running[0] or self._locked_out(now)
+        if not _running[0] or self._stop_pressed_ms is not None:
+            return False
+        if self._started_ms is not None and time.ticks_diff(now, self._started_ms) < RUN_START_GRACE_MS:
+            return False
+        self._stop_pressed_ms = now
+        self._last_attempt_ms = now
+        self._stop_retries = 0
+        log.note("button pressed -> stop")
+        failures = estop.engage("program button")
+        line = "estop engaged"
+        for _halt, exc in failures:
+            line += "; a motor halt failed: " + _exception_line(exc)
+        log.note(line)
+        return True
+
+    def _on_release(self, now):
+        """Debounced release: starts the program when the whole press happened while idle."""
+        stopping_press = self._press_stops
+        self._press_stops = False
+        if stopping_press:
+            # The contacts bounce as the stopping press lets go: keep starts shut a while longer.
+            self._lockout_until_ms = time.ticks_add(now, START_LOCKOUT_MS)
+            return False
+        if _running[0] or self._locked_out(now):
+            return False
+        if self._idling:
+            self._start_requested = True
+        else:
+            print(
+                "program button: start refused, a console session holds the hub; "
+                "disconnect the host (or press reset) and press again"
+            )
+        return False
+
+    def note_external_stop(self):
+        """Arm the start lockout for a stop that did not come from this watcher (a console Ctrl-C),
+        so the echoes of that stop can't read as a fresh start press."""
+        self._lockout_until_ms = time.ticks_add(time.ticks_ms(), START_LOCKOUT_MS)
+        self._press_stops = self._down
+
+    # -- running a program (main thread) ------------------------------------------------------
+
+    def run_program(self, trigger="host run", path=None, reraise_interrupt=True):
+        """Run the staged program here and now, logged and framed; returns the outcome.
+
+        The outcome is "finished", "stopped" (KeyboardInterrupt: button or Ctrl-C) or "error".
+        With `reraise_interrupt` a stop propagates as KeyboardInterrupt once the run is logged, so a
+        host console sees the program end the way Ctrl-C ends any raw-REPL command.
+        """
+        if _running[0]:
+            raise RuntimeError("a program is already running; stop it with the program button first")
+        path = resolve_program(path or self.program_path)
+        gc.collect()
+        free = gc.mem_free() if hasattr(gc, "mem_free") else "n/a"
+        claims = pins.snapshot()
+        halts = estop.mark()
+        estop.clear(halts)
+        interrupted = None
+        with log.session(self.log_dir):
+            self._started_ms = time.ticks_ms()
+            log.write_text(
+                "started: %s | firmware %s | program %s | uptime %d ms | free %s B"
+                % (trigger, openbricks.firmware_label(), path, self._started_ms, free)
+            )
+            self._stop_pressed_ms = None
+            _set_running(True)
+            try:
+                _execute(path)
+                outcome = "finished"
+                _set_running(False)
+                log.write_text("stopped: finished after %d ms" % self._elapsed_ms())
+            except KeyboardInterrupt as exc:
+                outcome = "stopped"
+                interrupted = exc
+                _set_running(False)
+                log.write_text("stopped: KeyboardInterrupt (%s)" % self._stop_story())
+            except BaseException as exc:  # noqa: BLE001 - SystemExit too: the run ends, the hub lives on
+                outcome = "error"
+                _set_running(False)
+                text = traceback_text(exc)
+                log.console_print(text, end="")
+                log.write_text(text)
+                log.write_text("stopped: %s after %d ms" % (_exception_line(exc), self._elapsed_ms()))
+            finally:
+                _set_running(False)
+                estop.clear(halts)
+                pins.release_since(claims)
+                _native_wipe()
+                if self._stop_pressed_ms is not None:
+                    self._lockout_until_ms = time.ticks_add(time.ticks_ms(), START_LOCKOUT_MS)
+                self._stop_pressed_ms = None
+                self._started_ms = None
+        gc.collect()
+        if interrupted is not None and reraise_interrupt:
+            raise interrupted
+        return outcome
+
+    def _elapsed_ms(self):
+        return time.ticks_diff(time.ticks_ms(), self._started_ms)
+
+    def _stop_story(self):
+        if self._stop_pressed_ms is None:
+            self.note_external_stop()
+            return "Ctrl-C from the console"
+        return "%d ms after press, %d retries" % (
+            time.ticks_diff(time.ticks_ms(), self._stop_pressed_ms),
+            self._stop_retries,
+        )
+
+    def idle(self, duration_ms=None):
+        """Serve button starts in this (main) thread: forever, or for `duration_ms`.
+
+        A console Ctrl-C while idle ends this loop (the host takes the hub); one during a run only
+        ends the run.
+        """
+        began = time.ticks_ms()
+        self._idling = True
+        try:
+            while duration_ms is None or time.ticks_diff(time.ticks_ms(), began) < duration_ms:
+                if self._start_requested:
+                    self._start_requested = False
+                    self.run_program("button press", reraise_interrupt=False)
+                time.sleep_ms(self.poll_ms)
+        finally:
+            self._idling = False
+
+
+def get(
+    button_pin=DEFAULT_BUTTON_PIN, program_path=DEFAULT_PROGRAM_PATH, poll_ms=DEFAULT_POLL_MS, timer_id=None
+):
+    """The hub's launcher, created with its watcher timer on first use."""
+    if _launcher[0] is None:
+        launcher = Launcher(button_pin, program_path, poll_ms)
+        launcher.start_watcher(DEFAULT_TIMER_ID if timer_id is None else timer_id)
+        _launcher[0] = launcher
+    return _launcher[0]
+
+
+def run(
+    program_path=DEFAULT_PROGRAM_PATH, button_pin=DEFAULT_BUTTON_PIN, poll_ms=DEFAULT_POLL_MS, timer_id=0
+):
+    """Install the button watcher and serve button starts forever. Called from the frozen main.py."""
+    get(button_pin, program_path, poll_ms, timer_id).idle()
+
+
+def run_program(program_path=None):
+    """Run the staged program now (the host's `openbricks run`); a stop propagates KeyboardInterrupt."""
+    launcher = get()
+    return launcher.run_program("host run", program_path)

@@ -1,0 +1,249 @@
+"""Whole runs through the launcher: started by the program button (GPIO 39), printing, failing,
+stopped by the button, rotating past ten runs, capped, and read back with read_run."""
+
+import time
+
+import machine
+
+from fakes import tmpdir
+from fakes.expect import raises
+from openbricks import estop, launcher, log, pins
+
+BUTTON = 39
+
+
+def _stage(directory, source, name="program.py"):
+    path = directory + "/" + name
+    with open(path, "w") as f:
+        f.write(source)
+    return path
+
+
+def _at(ms, fn):
+    """Do `fn()` when the virtual clock reaches `ms` from now (a press scheduled into the future)."""
+    timer = machine.Timer(-1)
+    timer.init(mode=machine.Timer.ONE_SHOT, period=ms, callback=lambda _t: fn())
+
+
+def _press(at_ms, hold_ms=150):
+    _at(at_ms, lambda: machine.board.set_input(BUTTON, 0))
+    _at(at_ms + hold_ms, lambda: machine.board.set_input(BUTTON, 1))
+
+
+def _hub(directory, source, **kwargs):
+    path = _stage(directory, source)
+    hub = launcher.Launcher(BUTTON, path, log_dir=directory + "/logs", **kwargs)
+    hub.start_watcher(0)
+    return hub
+
+
+def _log_lines(directory, index=None):
+    runs = log.list_runs(directory + "/logs")
+    if index is None:
+        index = runs[-1][0]
+    lines = log.read_run(index, directory + "/logs").rstrip("\n").split("\n")
+    return [line.split(" ", 1)[1] for line in lines]  # drop the epoch stamps
+
+
+def test_button_press_runs_the_program_and_its_prints_land_in_the_log():
+    directory = tmpdir.make()
+    try:
+        hub = _hub(
+            directory,
+            "from openbricks.tools import wait\nfor i in range(3):\n    print('lap', i)\n    wait(100)\n",
+        )
+        _press(100)
+        hub.idle(2000)
+        lines = _log_lines(directory)
+        assert lines[0] == "-- run_0 --"
+        assert lines[1].startswith("started: button press | firmware 2.7.1 (")
+        assert "| program %s/program.py | uptime " % directory in lines[1]
+        assert lines[2:5] == ["lap 0", "lap 1", "lap 2"]
+        assert lines[5] == "stopped: finished after 300 ms"
+        assert not launcher.program_running()
+    finally:
+        tmpdir.remove(directory)
+
+
+def test_an_exception_leaves_its_full_traceback_in_the_log():
+    directory = tmpdir.make()
+    try:
+        source = "def drive(n):\n    return 100 // n\n\nprint('before')\ndrive(0)\n"
+        hub = _hub(directory, source)
+        _press(100)
+        hub.idle(1000)
+        text = "\n".join(_log_lines(directory))
+        assert "before" in text
+        assert "Traceback (most recent call last):" in text
+        assert 'program.py", line 5' in text  # the call site
+        assert 'program.py", line 2' in text  # and where it failed, inside drive()
+        assert "ZeroDivisionError" in text
+        assert _log_lines(directory)[-1].startswith("stopped: ZeroDivisionError")
+    finally:
+        tmpdir.remove(directory)
+
+
+def test_stop_press_engages_the_estop_and_frames_the_stop_in_the_log():
+    directory = tmpdir.make()
+    try:
+        source = (
+            "from openbricks import estop\n"
+            "from openbricks.tools import wait\n"
+            "estop.on_engage(lambda: print('motors halted'))\n"
+            "n = 0\n"
+            "while True:\n"
+            "    n += 1\n"
+            "    print('tick', n)\n"
+            "    wait(100)\n"
+        )
+        hub = _hub(directory, source)
+        _press(100)  # start on release at ~350 ms
+        _press(1500)  # stop on press-down
+        hub.idle(3000)
+        lines = _log_lines(directory)
+        stop_at = lines.index("button pressed -> stop")
+        assert lines[stop_at + 1 : stop_at + 3] == ["motors halted", "estop engaged"]
+        assert lines[-1] == "stopped: KeyboardInterrupt (0 ms after press, 0 retries)"
+        assert len(log.list_runs(directory + "/logs")) == 1  # the stopping press did not restart it
+        assert not estop.engaged()
+    finally:
+        tmpdir.remove(directory)
+
+
+def test_a_program_that_swallows_the_interrupt_is_retried_until_dead():
+    directory = tmpdir.make()
+    try:
+        source = (
+            "import time\n"
+            "survived = 0\n"
+            "while True:\n"
+            "    try:\n"
+            "        time.sleep_ms(10)\n"
+            "    except KeyboardInterrupt:\n"
+            "        survived += 1\n"
+            "        print('swallowed', survived)\n"
+            "        if survived == 3:\n"
+            "            raise\n"
+        )
+        hub = _hub(directory, source)
+        _press(100)
+        _press(1000)
+        hub.idle(4000)
+        lines = _log_lines(directory)
+        assert "swallowed 3" in lines
+        # The press lands at 1100 ms; retries follow every 300 ms.
+        assert lines[-1] == "stopped: KeyboardInterrupt (600 ms after press, 2 retries)"
+    finally:
+        tmpdir.remove(directory)
+
+
+def test_the_stopping_press_and_its_bounce_never_restart_the_robot():
+    directory = tmpdir.make()
+    try:
+        hub = _hub(directory, "from openbricks.tools import wait\nwhile True:\n    wait(50)\n")
+        _press(100)
+        _press(1000, hold_ms=400)  # a long stop press: its release must not start a new run
+        _press(1500)  # bounce within the lockout after the stop: ignored
+        hub.idle(2500)
+        assert [i for i, _p in log.list_runs(directory + "/logs")] == [0]
+        _press(100)  # a deliberate press later starts the program again
+        _press(800)
+        hub.idle(1500)
+        assert [i for i, _p in log.list_runs(directory + "/logs")] == [0, 1]
+        assert _log_lines(directory, 1)[1].startswith("started: button press")
+    finally:
+        tmpdir.remove(directory)
+
+
+def test_rotation_past_ten_runs_keeps_the_last_ten_readable():
+    directory = tmpdir.make()
+    try:
+        hub = _hub(directory, "import time\nprint('run at', time.ticks_ms())\n")
+        for _ in range(12):
+            _press(100)
+            hub.idle(900)
+        runs = log.list_runs(directory + "/logs")
+        assert [index for index, _path in runs] == list(range(2, 12))
+        assert _log_lines(directory, 11)[0] == "-- run_11 --"
+        assert _log_lines(directory, 11)[-1].startswith("stopped: finished")
+        with raises(OSError, "run 1 is not on the hub"):
+            log.read_run(1, directory + "/logs")
+    finally:
+        tmpdir.remove(directory)
+
+
+def test_a_runaway_printer_is_capped_at_64_kb_and_still_framed():
+    directory = tmpdir.make()
+    try:
+        source = "from openbricks.tools import wait\nwhile True:\n    print('x' * 60)\n    wait(1)\n"
+        hub = _hub(directory, source)
+        _press(100)
+        _press(2000)
+        hub.idle(3000)
+        text = log.read_run(0, directory + "/logs")
+        assert 64 * 1024 < len(text) <= 65 * 1024
+        assert "log capped at 65536 bytes" in text
+        assert text.rstrip("\n").endswith("stopped: KeyboardInterrupt (0 ms after press, 0 retries)")
+    finally:
+        tmpdir.remove(directory)
+
+
+def test_host_run_streams_output_and_a_console_ctrl_c_propagates_after_logging():
+    directory = tmpdir.make()
+    try:
+        hub = _hub(directory, "print('working')\nraise KeyboardInterrupt\n")
+        with raises(KeyboardInterrupt):
+            hub.run_program("host run")
+        lines = _log_lines(directory)
+        assert lines[1].startswith("started: host run |")
+        assert lines[2] == "working"
+        assert lines[-1] == "stopped: KeyboardInterrupt (Ctrl-C from the console)"
+    finally:
+        tmpdir.remove(directory)
+
+
+def test_running_state_is_signalled_to_listeners_and_program_claims_are_released():
+    directory = tmpdir.make()
+    try:
+        source = (
+            "from openbricks import launcher, pins\n"
+            "pins.claim(5, 'HC-SR04 trig', 'HCSR04')\n"
+            "print('running:', launcher.program_running())\n"
+        )
+        hub = _hub(directory, source)
+        seen = []
+        launcher.add_listener(seen.append)
+        try:
+            assert hub.run_program() == "finished"
+            assert hub.run_program() == "finished"  # GPIO 5 was handed back at the end of run 0
+        finally:
+            launcher.remove_listener(seen.append)
+        assert seen == [True, False, True, False]
+        assert "running: True" in _log_lines(directory)
+        assert pins.owner_of(5) is None
+        assert pins.owner_of(BUTTON) == ("program button", "launcher")
+    finally:
+        tmpdir.remove(directory)
+
+
+def test_a_press_while_a_console_session_holds_the_hub_starts_nothing():
+    directory = tmpdir.make()
+    try:
+        _hub(directory, "print('must not run')\n")
+        _press(100)
+        time.sleep_ms(1000)  # the main thread is busy elsewhere (a host session), not in idle()
+        assert log.list_runs(directory + "/logs") == []
+    finally:
+        tmpdir.remove(directory)
+
+
+def test_the_program_button_pin_is_guarded_and_a_missing_program_is_named():
+    directory = tmpdir.make()
+    try:
+        hub = launcher.Launcher(BUTTON, directory + "/program.mpy", log_dir=directory + "/logs")
+        with raises(pins.ReservedPinError, "in use as the program button (owner: launcher)"):
+            pins.claim(BUTTON, "L298N IN1", "L298N")
+        with raises(OSError, "no program staged at %s/program.mpy" % directory):
+            hub.run_program()
+    finally:
+        tmpdir.remove(directory)
