@@ -7,15 +7,24 @@ the host extension on CPython); reset() gives every test a fresh board.
 
 import sys
 
-from . import clock, esp32, machine
+from . import bluetooth, clock, dupterm, esp32, machine, neopixel
 
 _IS_MICROPYTHON = sys.implementation.name == "micropython"
+_BOARD_RUNTIME = (
+    "openbricks.ble_repl",
+    "openbricks.bluetooth",
+    "openbricks.bluetooth_button",
+    "openbricks.hub",
+)
 
 
 def install():
     sys.modules["machine"] = machine
     sys.modules["esp32"] = esp32
     sys.modules["time"] = clock
+    sys.modules["bluetooth"] = bluetooth
+    sys.modules["neopixel"] = neopixel
+    dupterm.install()
     if not _IS_MICROPYTHON:
         from . import framebuf, micropython
 
@@ -33,6 +42,8 @@ def reset():
     clock.reset()
     esp32.reset()
     machine.board.reset()
+    bluetooth.reset()
+    dupterm.reset()
     # Runtime state one test's drivers leave behind (GPIO claims, an engaged e-stop and its halt
     # callbacks) must not leak into the next test.
     pins = sys.modules.get("openbricks.pins")
@@ -41,3 +52,9 @@ def reset():
     estop = sys.modules.get("openbricks.estop")
     if estop is not None:
         estop.clear(0)
+    # The board-level runtime's singletons (BLE bridge, state listeners, the wired hub) point at
+    # the radio and timers just replaced.
+    for name in _BOARD_RUNTIME:
+        module = sys.modules.get(name)
+        if module is not None:
+            module.reset_state()
