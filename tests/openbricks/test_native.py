@@ -1,0 +1,40 @@
+"""openbricks._native re-exports the native cores lazily, and says clearly when they are missing."""
+
+import sys
+
+from fakes.expect import raises
+
+
+def _without_native():
+    """Hide the host build of the cores; a None entry makes CPython's import of it fail, as on a
+    MicroPython build without them (where there is nothing to hide in the first place)."""
+    saved = sys.modules.get("_openbricks_native")
+    if saved is not None:
+        sys.modules["_openbricks_native"] = None
+    return saved
+
+
+def _restore(saved):
+    if saved is not None:
+        sys.modules["_openbricks_native"] = saved
+
+
+def test_importing_the_module_never_needs_the_cores():
+    saved = _without_native()
+    try:
+        from openbricks import _native
+
+        assert not _native.available()
+        with raises(ImportError, "not in this MicroPython build"):
+            _native.Servo  # noqa: B018 - the attribute access is the import
+        with raises(ImportError, "not in this MicroPython build"):
+            from openbricks._native import motor_process  # noqa: F401
+    finally:
+        _restore(saved)
+
+
+def test_unknown_names_are_attribute_errors_naming_the_cores():
+    from openbricks import _native
+
+    with raises(AttributeError, "the cores are motor_process, Servo"):
+        _native.Motor  # noqa: B018
