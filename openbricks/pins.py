@@ -69,7 +69,7 @@ class ReservedPinError(ValueError):
         text = "GPIO %s can't be used as %s%s: %s (owner: %s)" % (pin, role, who, reason, owner)
         if hint:
             text += "; " + hint
-        ValueError.__init__(self, text)
+        super().__init__(text)
 
 
 def _owner_name(owner):
