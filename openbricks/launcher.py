@@ -401,14 +401,36 @@ class Launcher:
 
 
 def get(
-    button_pin=DEFAULT_BUTTON_PIN, program_path=DEFAULT_PROGRAM_PATH, poll_ms=DEFAULT_POLL_MS, timer_id=None
+    button_pin=DEFAULT_BUTTON_PIN,
+    program_path=DEFAULT_PROGRAM_PATH,
+    poll_ms=DEFAULT_POLL_MS,
+    timer_id=DEFAULT_TIMER_ID,
+    log_dir=log.LOG_DIR,
 ):
-    """The hub's launcher, created with its watcher timer on first use."""
+    """The hub's launcher, created with its watcher timer on first use (later arguments are ignored)."""
     if _launcher[0] is None:
-        launcher = Launcher(button_pin, program_path, poll_ms)
-        launcher.start_watcher(DEFAULT_TIMER_ID if timer_id is None else timer_id)
+        launcher = Launcher(button_pin, program_path, poll_ms, log_dir)
+        launcher.start_watcher(timer_id)
         _launcher[0] = launcher
     return _launcher[0]
+
+
+def shutdown():
+    """Stop the hub's watcher and hand back the program-button pin (to rewire it, or a soft reset)."""
+    launcher = _launcher[0]
+    if launcher is None:
+        return
+    _launcher[0] = None
+    if launcher._timer is not None:
+        launcher._timer.deinit()
+    pins.release(launcher.button_pin, "launcher")
+
+
+def reset_state():
+    """Forget the hub's launcher, the running flag and the listeners (a soft reset; tests)."""
+    shutdown()
+    _running[0] = False
+    del _listeners[:]
 
 
 def run(

@@ -15,6 +15,7 @@ _BOARD_RUNTIME = (
     "openbricks.bluetooth",
     "openbricks.bluetooth_button",
     "openbricks.hub",
+    "openbricks.launcher",
 )
 
 
@@ -26,10 +27,11 @@ def install():
     sys.modules["neopixel"] = neopixel
     dupterm.install()
     if not _IS_MICROPYTHON:
-        from . import framebuf, micropython
+        from . import deflate, framebuf, micropython
 
         sys.modules["micropython"] = micropython
         sys.modules["framebuf"] = framebuf  # built into MicroPython
+        sys.modules["deflate"] = deflate  # built into MicroPython
         try:
             import openbricks_native
 

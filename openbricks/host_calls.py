@@ -1,0 +1,467 @@
+"""The hub side of every host operation, called over the raw REPL with data, never with generated code.
+
+The host sends one short line such as `import openbricks.host_calls as h; h.info()` and reads back
+exactly one result line: RESULT_MARKER followed by a JSON object with `"ok": true` and the data, or
+`"ok": false` with `"error"` (what went wrong and how to fix it) and `"type"` (the exception class).
+Program output printed before the result line (by `run`) is the program's own, streamed as it runs.
+
+Calls: info, set_rtc, stage, stage_begin / stage_append / stage_end, run, runs, read_run, idle,
+record_provenance, servo_scan, servo_set_id. Binary payloads travel as base64 text, optionally
+zlib-compressed (the hub has `deflate`), because raw-REPL input is text and base64 of compressed bytes
+is shorter than a Python bytes literal of the originals.
+"""
+
+import binascii
+import gc
+import io
+import json
+import os
+import sys
+import time
+
+import machine
+
+import openbricks
+from openbricks import launcher, log, pins
+
+RESULT_MARKER = "@openbricks-result "
+PROTOCOL = 1
+MAX_PROGRAM_BYTES = 256 * 1024  # staged program ceiling (bytes after decompression)
+SERVO_UART_ID = 1
+SERVO_TX = 14
+SERVO_RX = 41
+SERVO_BAUD = 1000000
+READ_CHUNK_BYTES = 8192  # largest slice of a run log returned by one read_run call
+
+_REG_ID = 0x05  # STS EEPROM: bus id
+_REG_LOCK = 0x37  # STS: 0 unlocks EEPROM writes, 1 locks them again
+_INST_PING = 0x01
+_EPOCH_2000_MS = 946684800000
+
+_staging = {}  # the chunked upload in progress: path, part, file, received
+
+
+def _reply(result):
+    print(RESULT_MARKER + json.dumps(result))
+    return result
+
+
+def _call(fn, *args, **kwargs):
+    """Run one host call and print its single result line; KeyboardInterrupt still propagates."""
+    try:
+        result = fn(*args, **kwargs)
+    except KeyboardInterrupt:
+        raise
+    except Exception as exc:  # noqa: BLE001 - every failure must reach the host as data
+        return _reply({"ok": False, "type": type(exc).__name__, "error": str(exc)})
+    result["ok"] = True
+    return _reply(result)
+
+
+# -- version and capabilities --------------------------------------------------------------------
+
+
+def _info():
+    impl = sys.implementation
+    mpy = getattr(impl, "_mpy", None)
+    try:
+        import deflate  # noqa: F401
+
+        compression = ["zlib"]
+    except ImportError:
+        compression = []
+    gc.collect()
+    return {
+        "protocol": PROTOCOL,
+        "firmware": openbricks.firmware_label(),
+        "version": openbricks.__version__,
+        "provenance": openbricks.provenance(),
+        "chip": pins.chip(),
+        "machine": getattr(impl, "_machine", None),
+        "runtime": "%s %s" % (impl.name, ".".join([str(part) for part in impl.version[:3]])),
+        "accepts_mpy": mpy is not None,
+        "mpy_version": None if mpy is None else mpy & 0xFF,
+        "program_path": launcher.DEFAULT_PROGRAM_PATH,
+        "max_program_bytes": MAX_PROGRAM_BYTES,
+        "compression": compression,
+        "log_slots": log.MAX_RUNS,
+        "log_max_bytes": log.MAX_BYTES,
+        "running": launcher.program_running(),
+        "free_bytes": gc.mem_free() if hasattr(gc, "mem_free") else None,
+        "epoch_ms": log.epoch_ms(),
+    }
+
+
+def info():
+    """Firmware label, chip, runtime and what the hub accepts (.mpy version, sizes, log slots)."""
+    return _call(_info)
+
+
+# -- the clock -----------------------------------------------------------------------------------
+
+
+def _set_rtc(epoch_ms):
+    if not isinstance(epoch_ms, int) or epoch_ms < _EPOCH_2000_MS:
+        raise ValueError("epoch_ms=%r: pass the host's UTC time as integer Unix milliseconds" % (epoch_ms,))
+    port_s = epoch_ms // 1000
+    if time.gmtime(0)[0] == 2000:
+        port_s -= _EPOCH_2000_MS // 1000
+    t = time.gmtime(port_s)
+    # RTC tuple: (year, month, day, weekday, hours, minutes, seconds, microseconds)
+    machine.RTC().datetime((t[0], t[1], t[2], t[6], t[3], t[4], t[5], (epoch_ms % 1000) * 1000))
+    return {"epoch_ms": log.epoch_ms()}
+
+
+def set_rtc(epoch_ms):
+    """Set the hub clock to the host's UTC time so run-log stamps are real wall-clock times."""
+    return _call(_set_rtc, epoch_ms)
+
+
+# -- staging a program ---------------------------------------------------------------------------
+
+
+def _decode(payload, encoding):
+    if encoding == "base64":
+        # Bytes in: some builds' binascii (the pure-Python one) only takes bytes.
+        return binascii.a2b_base64(payload.encode() if isinstance(payload, str) else payload)
+    if encoding == "raw":
+        return bytes(payload)
+    raise ValueError("encoding=%r: use 'base64' (text) or 'raw' (bytes)" % (encoding,))
+
+
+def _check_path(path):
+    if not isinstance(path, str) or not path.startswith("/") or path.endswith("/") or ".." in path:
+        raise ValueError("path=%r: stage to an absolute file path such as /program.mpy" % (path,))
+
+
+def _copy_out(source, dest, compression):
+    """Copy (and inflate) stream `source` into file `dest`; returns (size, crc32) of what was written."""
+    if compression == "zlib":
+        try:
+            import deflate
+        except ImportError:
+            raise ValueError("this runtime has no deflate module: stage the program uncompressed") from None
+        source = deflate.DeflateIO(source, deflate.ZLIB)
+    elif compression is not None:
+        raise ValueError("compression=%r: use 'zlib' or None" % (compression,))
+    size = 0
+    crc = 0
+    buf = bytearray(512)
+    view = memoryview(buf)
+    while True:
+        n = source.readinto(buf)
+        if not n:
+            return size, crc
+        size += n
+        if size > MAX_PROGRAM_BYTES:
+            raise ValueError(
+                "program is larger than the hub accepts (%d bytes max); split it into modules"
+                % MAX_PROGRAM_BYTES
+            )
+        crc = binascii.crc32(view[:n], crc)
+        dest.write(view[:n])
+
+
+def _remove(path):
+    try:
+        os.remove(path)
+    except OSError:
+        pass
+
+
+def _commit(part, path, size, crc, want_size, want_crc32):
+    """Verify the temp file and move it into place, so a broken upload never replaces a good program."""
+    if want_size is not None and size != want_size:
+        _remove(part)
+        raise ValueError("upload truncated: got %d bytes, expected %d; stage it again" % (size, want_size))
+    if want_crc32 is not None and crc != want_crc32 & 0xFFFFFFFF:
+        _remove(part)
+        raise ValueError("upload corrupted: crc32 %08x, expected %08x; stage it again" % (crc, want_crc32))
+    try:
+        os.rename(part, path)
+    except OSError:
+        _remove(path)  # filesystems that refuse to rename over an existing file
+        os.rename(part, path)
+    # The launcher (and import) would pick up a stale .py/.mpy sibling: it must not shadow this one.
+    if path.endswith(".mpy"):
+        _remove(path[:-4] + ".py")
+    elif path.endswith(".py"):
+        _remove(path[:-3] + ".mpy")
+    return {"path": path, "bytes": size, "crc32": crc}
+
+
+def _stage(payload, path, encoding, compression, size, crc32):
+    _check_path(path)
+    if launcher.program_running():
+        raise RuntimeError("a program is running: stop it before staging a new one")
+    data = _decode(payload, encoding)
+    part = path + ".part"
+    with open(part, "wb") as f:
+        try:
+            got, crc = _copy_out(io.BytesIO(data), f, compression)
+        except Exception:
+            f.close()
+            _remove(part)
+            raise
+    return _commit(part, path, got, crc, size, crc32)
+
+
+def stage(
+    payload, path=launcher.DEFAULT_PROGRAM_PATH, encoding="base64", compression=None, size=None, crc32=None
+):
+    """Write a program to `path` atomically (temp file, verify `size`/`crc32` of the result, rename)."""
+    return _call(_stage, payload, path, encoding, compression, size, crc32)
+
+
+def _stage_begin(path):
+    _check_path(path)
+    if launcher.program_running():
+        raise RuntimeError("a program is running: stop it before staging a new one")
+    _stage_abort()
+    part = path + ".upload"
+    _staging.update(path=path, part=part, file=open(part, "wb"), received=0)
+    return {"path": path}
+
+
+def _stage_abort():
+    f = _staging.get("file")
+    if f is not None:
+        f.close()
+        _remove(_staging["part"])
+    _staging.clear()
+
+
+def _stage_append(payload, encoding):
+    if not _staging:
+        raise RuntimeError("no upload in progress: call stage_begin(path) first")
+    data = _decode(payload, encoding)
+    _staging["received"] += len(data)
+    if _staging["received"] > MAX_PROGRAM_BYTES:
+        _stage_abort()
+        raise ValueError("program is larger than the hub accepts (%d bytes max)" % MAX_PROGRAM_BYTES)
+    _staging["file"].write(data)
+    return {"received": _staging["received"]}
+
+
+def _stage_end(compression, size, crc32):
+    if not _staging:
+        raise RuntimeError("no upload in progress: call stage_begin(path) first")
+    path, upload = _staging["path"], _staging["part"]
+    _staging["file"].close()
+    _staging.clear()
+    part = path + ".part"
+    try:
+        with open(upload, "rb") as source, open(part, "wb") as dest:
+            got, crc = _copy_out(source, dest, compression)
+    except Exception:
+        _remove(part)
+        raise
+    finally:
+        _remove(upload)
+    return _commit(part, path, got, crc, size, crc32)
+
+
+def stage_begin(path=launcher.DEFAULT_PROGRAM_PATH):
+    """Start a chunked upload (for programs too big for one call); any unfinished one is dropped."""
+    return _call(_stage_begin, path)
+
+
+def stage_append(payload, encoding="base64"):
+    """Append one chunk (as sent: still compressed if the upload is)."""
+    return _call(_stage_append, payload, encoding)
+
+
+def stage_end(compression=None, size=None, crc32=None):
+    """Finish the chunked upload: inflate if needed, verify, and move it into place."""
+    return _call(_stage_end, compression, size, crc32)
+
+
+# -- running and the run logs --------------------------------------------------------------------
+
+
+def run(path=None):
+    """Run the staged program through the launcher; its output streams first, then the result line.
+
+    A stop (program button or Ctrl-C) prints the result and then propagates KeyboardInterrupt, as any
+    interrupted raw-REPL command does.
+    """
+    hub = launcher.get()
+    try:
+        outcome = hub.run_program("host run", path)
+    except KeyboardInterrupt:
+        _reply({"ok": True, "outcome": "stopped", "run": _last_run(hub.log_dir)})
+        raise
+    except Exception as exc:  # noqa: BLE001 - e.g. nothing staged: the host gets the reason
+        return _reply({"ok": False, "type": type(exc).__name__, "error": str(exc)})
+    return _reply({"ok": True, "outcome": outcome, "run": _last_run(hub.log_dir)})
+
+
+def _last_run(log_dir):
+    runs = log.list_runs(log_dir)
+    return runs[-1][0] if runs else None
+
+
+def _runs(log_dir):
+    found = []
+    for index, path in log.list_runs(log_dir):
+        found.append({"index": index, "bytes": os.stat(path)[6]})
+    return {"runs": found, "slots": log.MAX_RUNS}
+
+
+def runs(log_dir=log.LOG_DIR):
+    """The run logs still on the hub, oldest first, with their sizes."""
+    return _call(_runs, log_dir)
+
+
+def _read_run(index, offset, max_bytes, log_dir):
+    max_bytes = max(1, min(max_bytes, READ_CHUNK_BYTES))
+    path = log.run_path(index, log_dir)
+    total = os.stat(path)[6]
+    with open(path, "rb") as f:
+        f.seek(offset)
+        data = f.read(max_bytes)
+    end = offset + len(data)
+    if end < total:
+        cut = data.rfind(b"\n") + 1  # hand out whole lines so stamps stay with their text
+        if cut == 0:
+            cut = len(data)
+            while cut > 0 and (data[cut - 1] & 0xC0) == 0x80:
+                cut -= 1  # never split a UTF-8 character
+            if cut > 0 and data[cut - 1] >= 0xC0:
+                cut -= 1
+        data = data[:cut]
+        end = offset + cut
+    return {
+        "index": index,
+        "offset": offset,
+        "text": data.decode(),
+        "next_offset": end if end < total else None,
+        "total_bytes": total,
+    }
+
+
+def read_run(index, offset=0, max_bytes=READ_CHUNK_BYTES, log_dir=log.LOG_DIR):
+    """A slice of run `index`'s log from byte `offset`; call again at `next_offset` until it is None."""
+    return _call(_read_run, index, offset, max_bytes, log_dir)
+
+
+def idle():
+    """Hand the hub back to the launcher's idle loop, so the program button starts programs again.
+
+    The host calls this last, before it disconnects; its next connection's Ctrl-C ends the loop.
+    """
+    _reply({"ok": True, "idle": True})
+    try:
+        launcher.get().idle()
+    except KeyboardInterrupt:
+        pass
+
+
+def record_provenance(verdict):
+    """Store the flasher's verdict ("official" / "customized") for the firmware now on the hub."""
+
+    def _record():
+        openbricks.record_provenance(verdict)
+        return {"firmware": openbricks.firmware_label()}
+
+    return _call(_record)
+
+
+# -- servo bus: scan and re-ID through the hub ---------------------------------------------------
+
+
+def _open_bus(uart_id, tx, rx, baud):
+    if launcher.program_running():
+        raise RuntimeError("a program is running and owns the servo bus: stop it first")
+    from openbricks.drivers import st3215
+
+    existed = st3215._SCServoBus._by_uart.get(uart_id) is not None
+    return st3215._SCServoBus.for_uart(uart_id, tx, rx, baud, None), existed
+
+
+def _scan(bus, first_id=0, last_id=253):
+    found = []
+    for servo_id in range(first_id, last_id + 1):
+        if bus.request(servo_id, _INST_PING, b"", 1) is not None:
+            found.append(servo_id)
+    return found
+
+
+def _servo_scan(uart_id, tx, rx, baud):
+    bus, existed = _open_bus(uart_id, tx, rx, baud)
+    try:
+        return {"ids": _scan(bus), "bus": bus.where()}
+    finally:
+        if not existed:
+            bus.close()
+
+
+def servo_scan(uart_id=SERVO_UART_ID, tx=SERVO_TX, rx=SERVO_RX, baud=SERVO_BAUD):
+    """List the servo ids (0..253) answering on the hub's servo bus; changes nothing."""
+    return _call(_servo_scan, uart_id, tx, rx, baud)
+
+
+def _check_id(name, value):
+    if not isinstance(value, int) or not 0 <= value <= 253:
+        raise ValueError("%s=%r: servo bus ids are 0..253 (254 is broadcast)" % (name, value))
+
+
+def _servo_set_id(new_id, old_id, uart_id, tx, rx, baud):
+    _check_id("new_id", new_id)
+    if old_id is not None:
+        _check_id("old_id", old_id)
+    bus, existed = _open_bus(uart_id, tx, rx, baud)
+    try:
+        ids = _scan(bus)
+        if not ids:
+            raise OSError(
+                "no servo answers on %s: check its power and the TX/RX wiring, then scan again" % bus.where()
+            )
+        if old_id is None:
+            if len(ids) > 1:
+                raise ValueError(
+                    "%d servos answer (ids %s): pass old_id= to say which one to re-ID; it is never guessed"
+                    % (len(ids), ", ".join([str(i) for i in ids]))
+                )
+            old_id = ids[0]
+        elif old_id not in ids:
+            raise ValueError(
+                "no servo answers at old_id=%d; the bus has ids %s"
+                % (old_id, ", ".join([str(i) for i in ids]))
+            )
+        if new_id == old_id:
+            return {"old_id": old_id, "new_id": new_id, "ids": ids, "changed": False}
+        if new_id in ids:
+            raise ValueError(
+                "id %d is already taken by another servo on the bus: pick a free id (in use: %s)"
+                % (new_id, ", ".join([str(i) for i in ids]))
+            )
+        if bus.write(old_id, _REG_LOCK, b"\x00") is None:
+            raise OSError("servo %d did not acknowledge the EEPROM unlock; nothing was changed" % old_id)
+        # The servo answers an id write from its new id (or not at all): read-back is the real check.
+        bus.write(old_id, _REG_ID, bytes((new_id,)), 1)
+        bus.write(new_id, _REG_LOCK, b"\x01")
+        reply = bus.read(new_id, _REG_ID, 1)
+        if reply is None or reply[1][0] != new_id:
+            raise OSError(
+                "servo %d did not come back as id %d after the write: scan the bus to see where it is"
+                % (old_id, new_id)
+            )
+        after = _scan(bus)
+        if old_id in after:
+            raise OSError(
+                "a servo still answers at id %d after the re-ID (two servos shared that id?); "
+                "wire one servo at a time and retry" % old_id
+            )
+        return {"old_id": old_id, "new_id": new_id, "ids": after, "changed": True}
+    finally:
+        if not existed:
+            bus.close()
+
+
+def servo_set_id(new_id, old_id=None, uart_id=SERVO_UART_ID, tx=SERVO_TX, rx=SERVO_RX, baud=SERVO_BAUD):
+    """Re-ID one servo on the hub's bus and verify it by read-back.
+
+    With more than one servo answering, `old_id` is required: the hub never guesses which to change.
+    """
+    return _call(_servo_set_id, new_id, old_id, uart_id, tx, rx, baud)
