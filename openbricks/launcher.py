@@ -87,6 +87,29 @@ def _set_running(running):
             print("launcher: running listener failed: %r" % (exc,))
 
 
+_EVENT_RING = 16
+_events = []  # (ticks_ms, what) of the latest button decisions, oldest first
+
+
+def _event(now, what):
+    if len(_events) >= _EVENT_RING:
+        _events.pop(0)
+    _events.append((now, what))
+
+
+def dump_events():
+    """Print the latest program-button decisions, oldest first (why a press did or didn't act)."""
+    for at_ms, what in _events:
+        print("%10d ms  %s" % (at_ms, what))
+
+
+def _acknowledge(stop):
+    """Flash the status LED's press colour, if the BLE-button watcher that owns the LED is loaded."""
+    button = sys.modules.get("openbricks.bluetooth_button")
+    if button is not None:
+        button.notify_press(stop)
+
+
 def _raise_interrupt():
     raise KeyboardInterrupt
 
@@ -259,6 +282,7 @@ class Launcher:
                     interrupt = self._on_press(now) if down else self._on_release(now)
             if not interrupt and _running[0] and self._stop_pressed_ms is not None:
                 if time.ticks_diff(now, self._last_attempt_ms) >= STOP_RETRY_MS:
+                    _event(now, "stop retry")
                     self._stop_retries += 1
                     self._last_attempt_ms = now
                     interrupt = True
@@ -273,10 +297,17 @@ class Launcher:
     def _on_press(self, now):
         """Debounced press-down; returns True when the program must be interrupted now."""
         self._press_stops = _running[0] or self._locked_out(now)
-        if not _running[0] or self._stop_pressed_ms is not None:
+        if not _running[0]:
+            _event(now, "press (idle%s)" % (", locked out" if self._press_stops else ""))
+            return False
+        if self._stop_pressed_ms is not None:
+            _event(now, "press while stopping: ignored")
             return False
         if self._started_ms is not None and time.ticks_diff(now, self._started_ms) < RUN_START_GRACE_MS:
+            _event(now, "press within the start grace: ignored")
             return False
+        _event(now, "press -> stop")
+        _acknowledge(True)
         self._stop_pressed_ms = now
         self._last_attempt_ms = now
         self._stop_retries = 0
@@ -295,12 +326,17 @@ class Launcher:
         if stopping_press:
             # The contacts bounce as the stopping press lets go: keep starts shut a while longer.
             self._lockout_until_ms = time.ticks_add(now, START_LOCKOUT_MS)
+            _event(now, "release of a stopping press")
             return False
         if _running[0] or self._locked_out(now):
+            _event(now, "release: ignored (%s)" % ("running" if _running[0] else "locked out"))
             return False
         if self._idling:
+            _event(now, "release -> start")
+            _acknowledge(False)
             self._start_requested = True
         else:
+            _event(now, "release: start refused, console session")
             print(
                 "program button: start refused, a console session holds the hub; "
                 "disconnect the host (or press reset) and press again"
@@ -394,7 +430,12 @@ class Launcher:
             while duration_ms is None or time.ticks_diff(time.ticks_ms(), began) < duration_ms:
                 if self._start_requested:
                     self._start_requested = False
-                    self.run_program("button press", reraise_interrupt=False)
+                    try:
+                        self.run_program("button press", reraise_interrupt=False)
+                    except KeyboardInterrupt:
+                        # A stop retry that landed while the finished run was being torn down:
+                        # the run is over either way, and the hub must keep serving the button.
+                        pass
                 time.sleep_ms(self.poll_ms)
         finally:
             self._idling = False
@@ -431,6 +472,7 @@ def reset_state():
     shutdown()
     _running[0] = False
     del _listeners[:]
+    del _events[:]
 
 
 def run(

@@ -247,3 +247,31 @@ def test_the_program_button_pin_is_guarded_and_a_missing_program_is_named():
             hub.run_program()
     finally:
         tmpdir.remove(directory)
+
+
+def test_presses_are_acknowledged_on_the_status_led_and_kept_in_the_event_ring():
+    from openbricks import bluetooth_button
+
+    directory = tmpdir.make()
+    try:
+        hub = _hub(directory, "from openbricks.tools import wait\nwhile True:\n    wait(20)\n")
+        acks = []
+        real_notify = bluetooth_button.notify_press
+        bluetooth_button.notify_press = lambda stop=False: acks.append("stop" if stop else "start")
+        try:
+            _press(100)
+            _press(1000)
+            hub.idle(2000)
+        finally:
+            bluetooth_button.notify_press = real_notify
+        assert acks == ["start", "stop"]
+        printed = []
+        launcher.print = printed.append  # what dump_events() shows on the console
+        try:
+            launcher.dump_events()
+        finally:
+            del launcher.print
+        shown = [line.split(" ms  ", 1)[1] for line in printed]
+        assert shown == ["press (idle)", "release -> start", "press -> stop", "release of a stopping press"]
+    finally:
+        tmpdir.remove(directory)
