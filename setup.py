@@ -31,6 +31,17 @@ setup(
             include_dirs=[NATIVE, f"{NATIVE}/bindings/cpython"],
             depends=sorted(glob(f"{NATIVE}/*.h")) + sorted(glob(f"{NATIVE}/bindings/cpython/*.h")),
             extra_compile_args=["-O2", "-std=gnu99", "-Wall", "-Wextra", "-Wno-missing-field-initializers"],
-        )
+        ),
+        # The simulator's per-step control path (sim/native). A top-level module rather than
+        # openbricks_sim._mjcontrol: a private `build_ext --build-lib DIR` would otherwise create
+        # DIR/openbricks_sim/ with no __init__.py, which shadows the real package for anyone who puts
+        # DIR on PYTHONPATH. It needs no MuJoCo headers: it reaches mjData through the Python bindings.
+        Extension(
+            "openbricks_mjcontrol",
+            sources=sorted(glob("sim/native/*.c")),
+            include_dirs=[NATIVE, f"{NATIVE}/bindings/cpython"],
+            depends=[f"{NATIVE}/ob_types.h", *sorted(glob(f"{NATIVE}/bindings/cpython/py_*.h"))],
+            extra_compile_args=["-O2", "-std=gnu99", "-Wall", "-Wextra", "-Wno-missing-field-initializers"],
+        ),
     ],
 )

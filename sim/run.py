@@ -1,0 +1,234 @@
+"""Run a hub program against a simulated robot, in this process, and report what happened.
+
+    result = run_program("square.py", world="empty", chassis="st3032", limit_ms=60_000)
+    print(result.exit, result.pose, result.output)
+
+The program runs unchanged: as `__main__`, with its own globals, importing
+`machine`, `time`, `openbricks...` from the simulator's shim. It ends when
+it returns, raises, calls sys.exit() or machine.reset(), reaches the
+simulated time limit, exceeds the wall-clock limit (a loop that never lets
+time pass), or is stopped from another thread (request_stop()).
+
+The shim patches process-wide state (sys.modules, stdout), so run programs
+in a process of their own: `python -m openbricks_sim.run PROGRAM --json`
+does exactly that and prints the result as JSON; the CLI and the virtual hub
+build on these two entry points.
+"""
+
+import _thread
+import argparse
+import builtins
+import io
+import json
+import os
+import sys
+import threading
+import time
+import traceback
+from dataclasses import asdict, dataclass, field
+
+from .clock import SimStopped, SimTimeLimit
+from .shim import Shim
+from .simulation import Simulation
+
+FINISHED = "finished"  # the program returned (or called sys.exit())
+ERROR = "error"  # it raised
+TIME_LIMIT = "time_limit"  # simulated time ran out
+WALL_LIMIT = "wall_limit"  # it ran too long on the wall clock without letting simulated time pass
+STOPPED = "stopped"  # stopped from outside (Ctrl-C, a stopped job)
+RESET = "reset"  # machine.reset()
+
+
+@dataclass
+class RunResult:
+    exit: str
+    sim_ms: int
+    wall_s: float
+    pose: dict
+    output: str
+    error: str | None = None  # traceback text when exit == "error"
+    real_time_factor: float | None = None
+    peak_rss_mb: float | None = None
+    job: dict = field(default_factory=dict)  # the inputs: program, world, chassis, seed, start, limits
+
+    def to_json(self) -> str:
+        return json.dumps(asdict(self))
+
+
+class _Output(io.TextIOBase):
+    """Collects what the program prints, and passes each write on to `echo` (live output) if given."""
+
+    def __init__(self, echo=None):
+        self._parts = []
+        self._echo = echo
+
+    def writable(self):
+        return True
+
+    def write(self, text):
+        self._parts.append(text)
+        if self._echo is not None:
+            self._echo(text)
+        return len(text)
+
+    def text(self):
+        return "".join(self._parts)
+
+
+class ProgramRun:
+    """One run; request_stop() may be called from another thread while run() executes."""
+
+    def __init__(self, simulation):
+        self.simulation = simulation
+        self._wall_expired = False
+
+    def request_stop(self):
+        self.simulation.clock.request_stop()
+
+    def run(self, source, filename="main.py", wall_limit_s=None, echo=None, job=None) -> RunResult:
+        sim = self.simulation
+        code = compile(source, filename, "exec")
+        program_globals = {"__name__": "__main__", "__file__": filename, "__builtins__": builtins}
+        output = _Output(echo)
+        watchdog = None
+        if wall_limit_s is not None:
+            watchdog = threading.Timer(wall_limit_s, self._wall_limit_reached)
+            watchdog.daemon = True
+        exit_reason, error = FINISHED, None
+        saved_streams = sys.stdout, sys.stderr
+        started = time.perf_counter()
+        try:
+            with Shim(sim):
+                sys.stdout = sys.stderr = output
+                if watchdog is not None:
+                    watchdog.start()
+                try:
+                    exec(code, program_globals)
+                except SimTimeLimit:
+                    exit_reason = TIME_LIMIT
+                except SimStopped:
+                    exit_reason = STOPPED
+                except KeyboardInterrupt:
+                    exit_reason = WALL_LIMIT if self._wall_expired else STOPPED
+                except SystemExit:
+                    exit_reason = RESET if sim.board.reset_requested else FINISHED
+                except BaseException as exc:  # noqa: BLE001 - whatever the program raised is its result
+                    exit_reason = ERROR
+                    error = "".join(traceback.format_exception(type(exc), exc, exc.__traceback__))
+                finally:
+                    if watchdog is not None:
+                        watchdog.cancel()
+                    sys.stdout, sys.stderr = saved_streams
+        finally:
+            sys.stdout, sys.stderr = saved_streams
+        wall_s = time.perf_counter() - started
+        if exit_reason == WALL_LIMIT:
+            error = (
+                f"the program ran {wall_limit_s:g} s of wall-clock time while simulated time stood at "
+                f"{sim.clock.now_ms()} ms: a loop that never sleeps, waits on a device or reads the clock "
+                "keeps simulated time from passing (add time.sleep_ms() to the loop)"
+            )
+        pose = sim.physics.pose()
+        sim_ms = sim.clock.now_ms()
+        return RunResult(
+            exit=exit_reason,
+            sim_ms=sim_ms,
+            wall_s=round(wall_s, 4),
+            pose={"x_mm": pose.x_mm, "y_mm": pose.y_mm, "heading_deg": pose.heading_deg},
+            output=output.text(),
+            error=error,
+            real_time_factor=round(sim_ms / 1000 / wall_s, 2) if wall_s > 0 else None,
+            peak_rss_mb=_peak_rss_mb(),
+            job=job or {},
+        )
+
+    def _wall_limit_reached(self):
+        self._wall_expired = True
+        _thread.interrupt_main()
+
+
+def run_program(
+    program,
+    world="empty",
+    chassis="st3032",
+    seed=0,
+    start_mm_deg=None,
+    speed=None,
+    limit_ms=60_000,
+    wall_limit_s=None,
+    echo=None,
+    source=None,
+) -> RunResult:
+    """Run the program file `program` (or `source`, named `program`) and return its RunResult."""
+    if source is None:
+        with open(program, encoding="utf-8") as f:
+            source = f.read()
+    job = {
+        "program": os.fspath(program),
+        "world": world,
+        "chassis": chassis,
+        "seed": seed,
+        "start_mm_deg": list(start_mm_deg) if start_mm_deg is not None else None,
+        "speed": speed,
+        "limit_ms": limit_ms,
+    }
+    sim = Simulation(world, chassis, seed, start_mm_deg, speed=speed, limit_ms=limit_ms)
+    try:
+        return ProgramRun(sim).run(source, os.path.basename(os.fspath(program)), wall_limit_s, echo, job)
+    finally:
+        sim.close()
+
+
+def _peak_rss_mb():
+    try:
+        import resource
+    except ImportError:  # not on Windows
+        return None
+    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    return round(peak / (1024 * 1024 if sys.platform == "darwin" else 1024), 1)
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(
+        prog="python -m openbricks_sim.run", description="Run a hub program in the simulator."
+    )
+    parser.add_argument("program", help="the program file, as you would run it on the hub")
+    parser.add_argument("--world", default="empty", help="world alias or MJCF file (default: empty)")
+    parser.add_argument("--chassis", default="st3032", help="st3032 or jgb37 (default: st3032)")
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--start", type=float, nargs=3, metavar=("X_MM", "Y_MM", "HEADING_DEG"))
+    parser.add_argument(
+        "--speed", type=float, help="pace to wall time x SPEED (default: as fast as possible)"
+    )
+    parser.add_argument("--limit-ms", type=int, default=60_000, help="simulated time limit (default: 60000)")
+    parser.add_argument("--wall-limit-s", type=float, default=None, help="wall-clock limit")
+    parser.add_argument("--json", action="store_true", help="print the result as one JSON object")
+    args = parser.parse_args(argv)
+    stdout = sys.stdout
+    echo = None if args.json else stdout.write
+    result = run_program(
+        args.program,
+        args.world,
+        args.chassis,
+        args.seed,
+        tuple(args.start) if args.start else None,
+        args.speed,
+        args.limit_ms,
+        args.wall_limit_s,
+        echo,
+    )
+    if args.json:
+        stdout.write(result.to_json() + "\n")
+    else:
+        if result.error:
+            stdout.write(result.error)
+        stdout.write(
+            f"[{result.exit}] {result.sim_ms} ms simulated in {result.wall_s:.2f} s "
+            f"({result.real_time_factor}x); pose x={result.pose['x_mm']:.1f} mm "
+            f"y={result.pose['y_mm']:.1f} mm heading={result.pose['heading_deg']:.2f} deg\n"
+        )
+    return 0 if result.exit in (FINISHED, TIME_LIMIT) else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())

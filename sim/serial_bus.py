@@ -1,0 +1,405 @@
+"""The serial bus in the simulator: emulated ST-3032 servos on machine.UART, and the adoption engine.
+
+`ServoBus` is what the shim's UART delivers bytes to. It parses SCS packets
+with the firmware's own codec (openbricks_native.scs) and answers from each
+servo's register file, so the unchanged ST3032Motor driver code path runs:
+ping, register reads and writes, SYNC WRITE, broadcast.
+
+Each `EmulatedServo` is a servo's firmware over one simulated wheel: a native
+`openbricks_native.Servo` on a native wheel IO in the servo's own shaft frame
+(a right-hand servo is mounted mirrored, so its shaft frame is the wheel's
+negated). Its loop runs on the world's MotorProcess, ticked inside the
+physics step: wheel mode runs the speed loop at the acceleration register's
+ramp, mode 2 is open-loop duty, mode 3 moves by relative steps and holds,
+position mode moves to a goal. No Python runs per millisecond.
+
+`BusEngine` is what `_openbricks_native.serial_bus(uart_id)` returns in the
+simulator (see sim_arch.md for the contract the firmware's C engine shares):
+when a DriveBase adopts its two wheels it takes the servos into duty mode and
+drives them through native wheel IO, so the drivebase controller runs inside
+the physics step too.
+
+Register units (STS memory map): position in encoder steps (4096 per turn),
+speed in steps/s, acceleration in 100 steps/s^2, load and torque limit in
+0.1 % of stall.
+"""
+
+import openbricks_native
+
+scs = openbricks_native.scs
+
+STEPS_PER_REV = 4096
+_DEG_PER_STEP = 360.0 / STEPS_PER_REV
+
+REG_ID = 0x05
+REG_RESPONSE_LEVEL = 0x08
+REG_MIN_ANGLE = 0x09
+REG_MAX_ANGLE = 0x0B
+REG_MAX_TORQUE = 0x10
+REG_MODE = 0x21
+REG_TORQUE_ENABLE = 0x28
+REG_ACC = 0x29
+REG_GOAL_POSITION = 0x2A
+REG_GOAL_TIME = 0x2C  # the signed duty (0.1 %, sign bit 10) in open-loop mode 2
+REG_GOAL_SPEED = 0x2E
+REG_TORQUE_LIMIT = 0x30
+REG_LOCK = 0x37
+REG_PRESENT_POSITION = 0x38
+REG_PRESENT_SPEED = 0x3A
+REG_PRESENT_LOAD = 0x3C
+REG_PRESENT_VOLTAGE = 0x3E
+REG_PRESENT_TEMPERATURE = 0x3F
+REG_MOVING = 0x42
+REG_PRESENT_CURRENT = 0x45
+_REG_COUNT = 0x50
+
+MODE_POSITION = 0
+MODE_WHEEL = 1
+MODE_DUTY = 2
+MODE_STEP = 3
+
+# "As fast as the motor can" when the acceleration register is 0.
+_UNLIMITED_ACCEL_DPS2 = 1.0e6
+# Present Position in multi-turn modes is a sign-magnitude window of +-32767 steps that wraps.
+_MULTI_TURN_SPAN = 65535
+
+
+def _sign_magnitude(value, sign_bit):
+    value = int(round(value))
+    limit = (1 << sign_bit) - 1
+    return min(-value, limit) | (1 << sign_bit) if value < 0 else min(value, limit)
+
+
+def _from_sign_magnitude(raw, sign_bit):
+    magnitude = raw & ((1 << sign_bit) - 1)
+    return -magnitude if raw & (1 << sign_bit) else magnitude
+
+
+class EmulatedServo:
+    """One ST-3032's firmware: a register file over a simulated wheel, its loops run natively."""
+
+    def __init__(self, servo_id, wheel_io, world_process, no_load_dps=888.0, stall_torque_nm=0.98):
+        self.regs = bytearray(_REG_COUNT)
+        self.regs[REG_ID] = servo_id
+        self.regs[REG_RESPONSE_LEVEL] = 1
+        self._put16(REG_MAX_ANGLE, 4095)
+        self._put16(REG_MAX_TORQUE, 1000)
+        self._put16(REG_TORQUE_LIMIT, 1000)
+        self.regs[REG_MODE] = MODE_POSITION
+        self.regs[REG_PRESENT_VOLTAGE] = 120
+        self.regs[REG_PRESENT_TEMPERATURE] = 31
+        self.io = wheel_io  # servo shaft frame
+        self.no_load_dps = no_load_dps
+        self.stall_torque_nm = stall_torque_nm
+        self.silent = False  # unplugged: answers nothing
+        self.adopted_by = None  # the BusEngine driving this servo's bridge directly
+        self._world = world_process
+        self._target_steps = 0.0  # position / step mode destination, shaft steps
+        self.servo = openbricks_native.Servo(
+            io=wheel_io,
+            counts_per_rev=STEPS_PER_REV,
+            max_speed_dps=no_load_dps,
+            accel_dps2=_UNLIMITED_ACCEL_DPS2,
+            decel_dps2=_UNLIMITED_ACCEL_DPS2,
+        )
+        self.servo.coast()
+        world_process.subscribe(self.servo)
+
+    @property
+    def servo_id(self):
+        return self.regs[REG_ID]
+
+    @property
+    def mode(self):
+        return self.regs[REG_MODE]
+
+    @property
+    def torque_enabled(self):
+        return self.regs[REG_TORQUE_ENABLE] == 1
+
+    def unplug(self, silent=True):
+        """Pull (or, with silent=False, restore) the servo's cable: no replies, no readings."""
+        self.silent = bool(silent)
+        self.io.silent = self.silent
+        if self.adopted_by is not None:
+            self.adopted_by._slot_of(self).silent = self.silent
+
+    # --- registers -------------------------------------------------------------------------
+
+    def _get16(self, address):
+        return self.regs[address] | (self.regs[address + 1] << 8)
+
+    def _put16(self, address, value):
+        self.regs[address] = value & 0xFF
+        self.regs[address + 1] = (value >> 8) & 0xFF
+
+    def _position_steps(self):
+        angle = self.io.read_angle()
+        if angle is None:  # unplugged: the servo is not answering anyway
+            angle = self.io.true_angle_deg
+        return int(round(angle / _DEG_PER_STEP))
+
+    def _multi_turn(self):
+        return self._get16(REG_MIN_ANGLE) == 0 and self._get16(REG_MAX_ANGLE) == 0
+
+    def _speed_cap_dps(self):
+        goal = abs(_from_sign_magnitude(self._get16(REG_GOAL_SPEED), 15)) * _DEG_PER_STEP
+        return min(goal, self.no_load_dps) if goal else self.no_load_dps
+
+    def _accel_dps2(self):
+        acc = self.regs[REG_ACC]
+        return acc * 100 * _DEG_PER_STEP if acc else _UNLIMITED_ACCEL_DPS2
+
+    def refresh(self):
+        """Write the shaft's state into the read-only registers."""
+        steps = self._position_steps()
+        if self.mode == MODE_STEP:
+            present = _sign_magnitude(self._target_steps - steps, 15)
+        elif self._multi_turn():
+            present = _sign_magnitude(((steps + 32767) % _MULTI_TURN_SPAN) - 32767, 15)
+        else:
+            present = steps % STEPS_PER_REV
+        speed_steps = self.io.speed_dps / _DEG_PER_STEP
+        duty = self.io.duty_pct or 0.0
+        self._put16(REG_PRESENT_POSITION, present)
+        self._put16(REG_PRESENT_SPEED, _sign_magnitude(speed_steps, 15))
+        self._put16(REG_PRESENT_LOAD, _sign_magnitude(duty * 10, 10))
+        self._put16(REG_PRESENT_CURRENT, _sign_magnitude(abs(duty) * 16, 15))
+        self.regs[REG_MOVING] = 1 if abs(speed_steps) > 10 else 0
+
+    def read(self, address, length):
+        self.refresh()
+        return bytes(self.regs[address : address + length])
+
+    def write(self, address, data):
+        """Apply a register write the way the servo firmware does."""
+        end = address + len(data)
+        for i, byte in enumerate(data):
+            if address + i < _REG_COUNT:
+                self.regs[address + i] = byte
+
+        def touched(register, width=1):
+            return address < register + width and register < end
+
+        if self.adopted_by is not None:
+            return  # the engine owns the bridge; registers are kept but not acted on
+        if touched(REG_TORQUE_LIMIT, 2):
+            self.servo.set_duty_limit(max(0.1, min(100.0, self._get16(REG_TORQUE_LIMIT) / 10)))
+        if touched(REG_ACC) or touched(REG_GOAL_SPEED, 2):
+            accel = self._accel_dps2()
+            self.servo.settings(accel_dps2=accel, decel_dps2=accel, max_speed_dps=self._speed_cap_dps())
+        if touched(REG_MODE):
+            self._target_steps = self._position_steps()  # a fresh mode starts from where the shaft is
+        if touched(REG_GOAL_POSITION, 2):
+            goal = self._get16(REG_GOAL_POSITION)
+            here = self._position_steps()
+            if self.mode == MODE_STEP:
+                self._target_steps = here + _from_sign_magnitude(goal, 15)
+            elif self._multi_turn():
+                self._target_steps = _from_sign_magnitude(goal, 15)
+            else:
+                low, high = self._get16(REG_MIN_ANGLE), self._get16(REG_MAX_ANGLE)
+                goal = max(low, min(high, goal))
+                self._target_steps = here + (goal - here % STEPS_PER_REV)
+        if (
+            touched(REG_TORQUE_ENABLE)
+            or touched(REG_MODE)
+            or touched(REG_GOAL_SPEED, 2)
+            or (touched(REG_GOAL_POSITION, 2) or touched(REG_GOAL_TIME, 2))
+        ):
+            self._apply()
+
+    def _apply(self):
+        """Run what the mode and goal registers ask for (or coast with torque off)."""
+        if not self.torque_enabled:
+            self.servo.coast()
+            return
+        mode = self.mode
+        if mode == MODE_WHEEL:
+            self.servo.run_speed(_from_sign_magnitude(self._get16(REG_GOAL_SPEED), 15) * _DEG_PER_STEP)
+        elif mode == MODE_DUTY:
+            duty = _from_sign_magnitude(self._get16(REG_GOAL_TIME), 10) / 10
+            self.servo.dc(max(-100.0, min(100.0, duty)))
+        else:
+            self.servo.run_target(self._speed_cap_dps(), self._target_steps * _DEG_PER_STEP, then="hold")
+
+    # --- adoption ----------------------------------------------------------------------------
+
+    def hand_to(self, engine):
+        """The engine drives the bridge directly (duty mode); the servo's own loop stands down."""
+        self._world.unsubscribe(self.servo)
+        self.adopted_by = engine
+        self.regs[REG_MODE] = MODE_DUTY
+        self.regs[REG_TORQUE_ENABLE] = 1
+
+    def take_back(self):
+        """Back to register control, coasting in wheel mode, as after a power cycle of the engine."""
+        self.adopted_by = None
+        self.regs[REG_MODE] = MODE_WHEEL
+        self.regs[REG_TORQUE_ENABLE] = 0
+        self._put16(REG_GOAL_SPEED, 0)
+        self.servo.coast()
+        self._world.subscribe(self.servo)
+
+
+class ServoBus:
+    """The daisy chain on one UART: every servo sees every packet; the addressed one answers."""
+
+    def __init__(self):
+        self.servos = {}  # id -> EmulatedServo
+        self.packets = 0  # well-formed packets seen
+        self.garbage = 0  # bytes dropped while resynchronising
+        self._rx = bytearray()
+
+    def add(self, servo):
+        if servo.servo_id in self.servos:
+            raise ValueError(f"servo id {servo.servo_id} is already on this bus")
+        self.servos[servo.servo_id] = servo
+        return servo
+
+    def servo(self, servo_id):
+        return self.servos[servo_id]
+
+    def handle(self, data):
+        """Bytes the hub wrote; returns the bytes the servos answer with."""
+        self._rx += data
+        out = bytearray()
+        while self._rx:
+            frame = scs.decode_frame(self._rx)
+            if frame.result == "need_more":
+                self.garbage += frame.consumed
+                del self._rx[: frame.consumed]
+                break
+            del self._rx[: frame.consumed]
+            if frame.result != "ok":
+                self.garbage += frame.consumed
+                continue
+            self.packets += 1
+            out += self._execute(frame.id, frame.instruction, frame.params)
+        return bytes(out)
+
+    def _execute(self, servo_id, instruction, params):
+        if instruction == scs.SYNC_WRITE:
+            self._sync_write(params)
+            return b""
+        if servo_id == scs.BROADCAST_ID:
+            if instruction == scs.PING:
+                live = [s for s in self.servos.values() if not s.silent]
+                # A lone servo answers a broadcast ping; several would collide into garbage.
+                return self._reply(live[0], b"") if len(live) == 1 else b""
+            for servo in list(self.servos.values()):
+                if not servo.silent and instruction == scs.WRITE and params:
+                    self._write(servo, params)
+            return b""
+        servo = self.servos.get(servo_id)
+        if servo is None or servo.silent:
+            return b""
+        if instruction == scs.PING:
+            return self._reply(servo, b"")
+        if instruction == scs.READ and len(params) == 2:
+            return self._reply(servo, servo.read(params[0], params[1]))
+        if instruction == scs.WRITE and params:
+            self._write(servo, params)
+            return self._reply(servo, b"") if servo.regs[REG_RESPONSE_LEVEL] >= 1 else b""
+        return b""
+
+    def _write(self, servo, params):
+        old_id = servo.servo_id
+        servo.write(params[0], params[1:])
+        if servo.servo_id != old_id and self.servos.get(old_id) is servo:
+            del self.servos[old_id]
+            self.servos[servo.servo_id] = servo
+
+    def _sync_write(self, params):
+        if len(params) < 2:
+            return
+        address, width = params[0], params[1]
+        rows = params[2:]
+        for i in range(0, len(rows) - width, width + 1):
+            servo = self.servos.get(rows[i])
+            if servo is not None and not servo.silent:
+                servo.write(address, rows[i + 1 : i + 1 + width])
+
+    @staticmethod
+    def _reply(servo, params):
+        return scs.status(servo.servo_id, 0, params)
+
+
+class BusEngine:
+    """The serial-bus engine a DriveBase hands its wheels to (`_openbricks_native.serial_bus(uart_id)`).
+
+    Slots are small integers in adoption order. Each adopted servo runs in
+    open-loop duty mode driven by its slot's native motor IO, in the
+    adopting motor's user frame (its invert applied); angles are multi-turn
+    degrees, quantised to the encoder.
+    """
+
+    def __init__(self, bus, make_io, where):
+        self._bus = bus
+        self._make_io = make_io  # (servo, invert) -> a native wheel IO in the motor's user frame
+        self._where = where
+        self._slots = []  # [EmulatedServo, io] or None once released
+
+    def adopt(self, servo_id, invert=False, counts_per_rev=STEPS_PER_REV):
+        """Take servo `servo_id` onto the engine and return its slot."""
+        servo = self._bus.servos.get(servo_id)
+        if servo is None or servo.silent:
+            from openbricks.drivers.st3215 import not_responding_message
+
+            raise OSError(
+                not_responding_message(f"servo id {servo_id}", servo_id, None, self._where, 0, 1, 1)
+            )
+        if servo.adopted_by is not None:
+            raise ValueError(
+                f"servo id {servo_id} on {self._where} is already adopted "
+                f"(slot {self._slot_of_index(servo)}); release() it first"
+            )
+        if counts_per_rev != STEPS_PER_REV:
+            raise ValueError(f"counts_per_rev={counts_per_rev!r}: an ST-3032/ST-3215 encoder has 4096 counts")
+        io = self._make_io(servo, bool(invert))
+        servo.hand_to(self)
+        io.coast()
+        self._slots.append([servo, io])
+        return len(self._slots) - 1
+
+    def _slot_of_index(self, servo):
+        for i, entry in enumerate(self._slots):
+            if entry is not None and entry[0] is servo:
+                return i
+        return None
+
+    def _slot_of(self, servo):
+        return self._slots[self._slot_of_index(servo)][1]
+
+    def _io(self, slot):
+        if not isinstance(slot, int) or not 0 <= slot < len(self._slots) or self._slots[slot] is None:
+            raise ValueError(f"slot {slot!r} is not an adopted servo on {self._where}")
+        return self._slots[slot][1]
+
+    def motor_io(self, slot):
+        """The slot's native motor IO: DriveBase(left_io=..., right_io=...) drives the wheel through it."""
+        return self._io(slot)
+
+    def angle_deg(self, slot):
+        """Multi-turn angle in the motor's user frame, or None while the servo is silent."""
+        return self._io(slot).read_angle()
+
+    def speed_dps(self, slot):
+        return self._io(slot).speed_dps
+
+    def load_pct(self, slot):
+        """Output effort as a percentage of stall torque, signed in the user frame."""
+        io = self._io(slot)
+        return 100.0 * io.torque_nm / self._slots[slot][0].stall_torque_nm
+
+    def stats(self, slot):
+        """(replies, failed_reads, failed_in_a_row) of the engine's angle reads on this slot."""
+        return self._io(slot).stats
+
+    def release(self, slot):
+        """Give the servo back to register control (coasting); the slot number is not reused."""
+        io = self._io(slot)
+        io.coast()
+        servo = self._slots[slot][0]
+        self._slots[slot] = None
+        servo.take_back()

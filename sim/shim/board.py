@@ -1,0 +1,116 @@
+"""The simulated hub's outside world: what the shim's `machine` classes talk to.
+
+Everything a program can touch through `machine` ends here: bus devices,
+analog and digital inputs, pulse widths, PWM and pin outputs. Device models
+(the serial-bus servos, and the sensors in sim/sensors/) register on a
+`SimBoard`; the registration points mirror the test fakes' so a model works
+in both places:
+
+  board.attach_uart(uart_id, dev)        dev.handle(data: bytes) -> reply bytes
+  board.attach_i2c(bus, address, dev)    dev.read(n), dev.write(data),
+                                         dev.read_mem(reg, n, addrsize), dev.write_mem(reg, data, addrsize)
+                                         bus: a hardware I2C id (0, 1), or ("soft", scl_pin, sda_pin)
+  board.attach_spi(cs_pin, dev)          dev.transfer(data: bytes) -> bytes, while cs_pin is driven low
+  board.set_analog(pin, source)          raw 12-bit reading: an int, or a callable() -> int
+  board.set_input(pin, source)           level seen by an input Pin: 0/1, or a callable() -> 0/1
+  board.set_pulse(pin, source)           what time_pulse_us(pin, level) measures: us, or callable(level) -> us
+  board.set_encoder(pin_a, source)       a PCNT Encoder on phase_a=pin_a counts callable() -> edges
+  board.watch_output(pin, callback)      callback(pin_id, level_or_duty) when the program drives the pin
+
+Callables are read when the program reads, so a sensor model computes its
+value from the physics at that instant and costs nothing in between.
+
+Bus transfers take simulated time, as on the hub (wire time at the bus's
+baud rate/clock), so a program polling a sensor in a tight loop still lets
+the robot move.
+"""
+
+
+class SimBoard:
+    """The devices and signals around one simulated hub."""
+
+    def __init__(self, clock):
+        self.clock = clock
+        self.uart_devices = {}  # uart id -> device
+        self.i2c_devices = {}  # bus key -> {address: device}
+        self.spi_devices = {}  # cs pin -> device
+        self.analog = {}  # pin -> int or callable
+        self.inputs = {}  # pin -> 0/1 or callable
+        self.pulses = {}  # pin -> us or callable(level)
+        self.encoders = {}  # phase_a pin -> callable() -> edges
+        self.output_watchers = {}  # pin -> [callback]
+        self.pins = {}  # pin -> the last machine.Pin constructed on it
+        self.bitstreams = []  # (pin, timing, bytes) the program sent (LED strips), last 64
+        self.reset_requested = False
+
+    # --- registration (device models) ------------------------------------------------------
+
+    def attach_uart(self, uart_id, device):
+        self.uart_devices[uart_id] = device
+
+    def attach_i2c(self, bus, address, device):
+        self.i2c_devices.setdefault(bus, {})[address] = device
+
+    def attach_spi(self, cs_pin, device):
+        self.spi_devices[cs_pin] = device
+
+    def set_analog(self, pin, source):
+        self.analog[pin] = source
+
+    def set_input(self, pin, source):
+        """Drive an input from outside; a constant level change fires the pin's IRQ like an edge would."""
+        old = self.input_level(pin)
+        self.inputs[pin] = source
+        new = self.input_level(pin)
+        listener = self.pins.get(pin)
+        if listener is not None and old != new:
+            listener._edge(new)
+
+    def set_pulse(self, pin, source):
+        self.pulses[pin] = source
+
+    def set_encoder(self, pin_a, source):
+        self.encoders[pin_a] = source
+
+    def watch_output(self, pin, callback):
+        self.output_watchers.setdefault(pin, []).append(callback)
+
+    # --- reading (the machine shim) ----------------------------------------------------------
+
+    def input_level(self, pin, default=0):
+        source = self.inputs.get(pin, default)
+        return 1 if (source() if callable(source) else source) else 0
+
+    def analog_raw(self, pin):
+        source = self.analog.get(pin, 0)
+        value = source() if callable(source) else source
+        return max(0, min(4095, int(value)))
+
+    def pulse_us(self, pin, level):
+        source = self.pulses.get(pin)
+        if source is None:
+            return None
+        return int(source(level) if callable(source) else source)
+
+    def encoder_edges(self, pin_a):
+        source = self.encoders.get(pin_a)
+        return None if source is None else int(source())
+
+    def i2c_bus(self, key):
+        return self.i2c_devices.get(key, {})
+
+    def spi_selected(self):
+        """The SPI device whose chip-select pin is driven low right now, or None."""
+        for cs, device in self.spi_devices.items():
+            pin = self.pins.get(cs)
+            if pin is not None and pin._is_output() and pin._out == 0:
+                return device
+        return None
+
+    def output_changed(self, pin, value):
+        for callback in self.output_watchers.get(pin, ()):
+            callback(pin, value)
+
+    def record_bitstream(self, pin, timing, data):
+        self.bitstreams.append((pin, tuple(timing), bytes(data)))
+        del self.bitstreams[:-64]

@@ -1,0 +1,57 @@
+"""One simulated hub on one robot in one world: physics, clock, board and the robot's wiring together.
+
+    sim = Simulation(world="empty", chassis="st3032", seed=0)
+    with Shim(sim):            # sim.shim: the program's machine/time/... modules
+        ...                    # run hub code; time.sleep_ms() moves the robot
+    sim.close()
+
+The hub runtime's controllers run on openbricks_native.motor_process, which
+the physics step ticks natively; firmware inside simulated devices (each
+serial-bus servo's own speed loop) runs on the simulation's world_process.
+"""
+
+import openbricks_native
+
+from .clock import SimClock
+from .physics import Physics
+from .robot import wire
+from .shim.board import SimBoard
+
+
+class Simulation:
+    def __init__(
+        self,
+        world="empty",
+        chassis="st3032",
+        seed=0,
+        start_mm_deg=None,
+        speed=None,
+        limit_ms=None,
+        epoch_ms=None,
+        nvs=None,
+        wheel_diameter_mm=None,
+        axle_track_mm=None,
+    ):
+        self.physics = Physics(world, chassis, seed, start_mm_deg, wheel_diameter_mm, axle_track_mm)
+        try:
+            # A fresh hub: no controllers left over from an earlier run in this process.
+            openbricks_native.motor_process.reset()
+            self.world_process = openbricks_native.MotorProcess()
+            self.controller = self.physics.attach_control(self.world_process)
+            self.clock = SimClock(self.physics, speed=speed, limit_ms=limit_ms, epoch_ms=epoch_ms)
+            self.board = SimBoard(self.clock)
+            self.nvs = nvs if nvs is not None else {}
+            self.wiring = wire(self.physics, self.board, self.world_process)
+        except BaseException:
+            self.physics.close()
+            raise
+
+    def serial_bus(self, uart_id):
+        """`_openbricks_native.serial_bus(uart_id)`: the engine a DriveBase adopts serial-bus wheels onto."""
+        return self.wiring.serial_bus(uart_id)
+
+    def close(self):
+        """Stop every controller and release the physics callback (idempotent)."""
+        openbricks_native.motor_process.reset()
+        self.world_process.reset()
+        self.physics.close()
