@@ -168,9 +168,31 @@ def resolve_program(path=DEFAULT_PROGRAM_PATH):
     raise OSError(2, "no program staged at %s: upload one with `openbricks upload` or `run`" % path)
 
 
+def _forget_program_modules(before, directory):
+    """Drop the modules the program loaded from the filesystem, so a re-uploaded helper loads fresh.
+
+    Only files (relative paths are the hub's filesystem, absolute ones under the program's
+    directory) are dropped: built-in modules, openbricks itself and, on CPython, the simulator's
+    libraries stay loaded.
+    """
+    prefix = directory.rstrip("/") + "/"
+    for name in tuple(sys.modules):
+        if name in before or name.startswith("openbricks"):
+            continue
+        where = getattr(sys.modules[name], "__file__", None)
+        if where and (not where.startswith("/") or where.startswith(prefix)):
+            del sys.modules[name]
+
+
 def _execute(path):
-    """Run the program file in this thread with print teed into the run log."""
-    user_modules = set(sys.modules)
+    """Run the program file in this thread with print teed into the run log.
+
+    The program's directory leads sys.path for the run, so its helper modules import as they would
+    next to a script on a computer.
+    """
+    cut = path.rfind("/")
+    directory = path[:cut] if cut > 0 else "/"
+    before = set(sys.modules)
     saved_print = None
     try:
         import builtins
@@ -179,30 +201,22 @@ def _execute(path):
         builtins.print = log.tee_print
     except (ImportError, AttributeError):
         saved_print = None  # a port without overridable builtins: the namespace injection below
+    sys.path.insert(0, directory)
     try:
         if path.endswith(".py"):
             with open(path) as f:
                 code = compile(f.read(), path, "exec")
             exec(code, {"__name__": "__main__", "__file__": path, "print": log.tee_print})
         else:
-            # Bytecode (.mpy) can only be loaded through import; the module runs as `program`.
-            cut = path.rfind("/")
-            directory = path[:cut] if cut > 0 else "/"
-            name = path[cut + 1 : path.rfind(".")]
-            sys.path.insert(0, directory)
-            try:
-                __import__(name)
-            finally:
-                sys.path.remove(directory)
+            # Bytecode (.mpy) can only be loaded through import, so it runs with __name__ "program".
+            __import__(path[cut + 1 : path.rfind(".")])
     finally:
+        sys.path.remove(directory)
         if saved_print is not None:
             import builtins
 
             builtins.print = saved_print
-        # Modules the program imported are its own: a re-uploaded helper must load fresh next run.
-        for name in tuple(sys.modules):
-            if name not in user_modules and not name.startswith("openbricks"):
-                del sys.modules[name]
+        _forget_program_modules(before, directory)
 
 
 class Launcher:

@@ -275,3 +275,18 @@ def test_presses_are_acknowledged_on_the_status_led_and_kept_in_the_event_ring()
         assert shown == ["press (idle)", "release -> start", "press -> stop", "release of a stopping press"]
     finally:
         tmpdir.remove(directory)
+
+
+def test_a_re_uploaded_helper_module_is_loaded_fresh_on_the_next_run():
+    directory = tmpdir.make()
+    try:
+        hub = _hub(directory, "import helper\nprint('helper says', helper.VALUE)\n")
+        _stage(directory, "VALUE = 1\n", "helper.py")
+        hub.run_program()
+        # A different size too: CPython's bytecode cache trusts (mtime in s, size) of the source.
+        _stage(directory, "VALUE = 22\n", "helper.py")
+        hub.run_program()
+        assert "helper says 1" in _log_lines(directory, 0)
+        assert "helper says 22" in _log_lines(directory, 1)
+    finally:
+        tmpdir.remove(directory)
