@@ -290,3 +290,18 @@ def test_a_re_uploaded_helper_module_is_loaded_fresh_on_the_next_run():
         assert "helper says 22" in _log_lines(directory, 1)
     finally:
         tmpdir.remove(directory)
+
+
+def test_a_starved_watcher_tick_leaves_a_note_naming_the_gap():
+    directory = tmpdir.make()
+    try:
+        hub = _hub(directory, "from openbricks.tools import wait\nwait(8000)\n")
+        # A callback that blocks for 6 s holds every other timer back, like a long C call on the hub.
+        _at(600, lambda: time.sleep_ms(6000))
+        hub.run_program()
+        notes = [line for line in _log_lines(directory) if line.startswith("watcher tick starved")]
+        assert len(notes) == 1
+        assert notes[0].startswith("watcher tick starved for 60")  # ~6000 ms, at poll granularity
+        assert "(slowest log write " in notes[0]
+    finally:
+        tmpdir.remove(directory)
