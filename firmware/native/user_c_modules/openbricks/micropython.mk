@@ -1,0 +1,9 @@
+# _openbricks_native for the make ports (unix, ...): pass the parent folder,
+#   make -C <micropython>/ports/unix USER_C_MODULES=<repo>/firmware/native/user_c_modules
+# The bindings are scanned for qstrs; the cores include nothing of MicroPython, so they go in as
+# plain library sources.
+OB_NATIVE_DIR := $(USERMOD_DIR)/../..
+
+SRC_USERMOD_C += $(wildcard $(USERMOD_DIR)/*.c)
+SRC_USERMOD_LIB_C += $(wildcard $(OB_NATIVE_DIR)/*.c)
+CFLAGS_USERMOD += -I$(USERMOD_DIR) -I$(OB_NATIVE_DIR)
