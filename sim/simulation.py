@@ -15,6 +15,7 @@ import openbricks_native
 from .clock import SimClock
 from .physics import Physics
 from .robot import wire
+from .sensors.rig import attach_sensors
 from .shim.board import SimBoard
 
 
@@ -42,6 +43,7 @@ class Simulation:
             self.board = SimBoard(self.clock)
             self.nvs = nvs if nvs is not None else {}
             self.wiring = wire(self.physics, self.board, self.world_process)
+            self.sensors = attach_sensors(self.physics, self.board, seed)
         except BaseException:
             self.physics.close()
             raise

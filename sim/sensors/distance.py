@@ -192,11 +192,12 @@ class VL53L1XModel(RegisterDevice):
 
 
 class HCSR04Model:
-    """An ultrasonic ranger: after a trigger, ECHO stays high for the sound's round trip.
+    """An ultrasonic ranger: a pulse on TRIG fires a ping; ECHO then stays high for the round trip.
 
-    `echo_pulse_us(timeout_us)` is what machine.time_pulse_us measures on the ECHO pin: the pulse
-    width, or -1 when no echo starts within the timeout (nothing within `max_mm`, or too far for
-    the timeout).
+    `echo_pulse_us(level)` is what machine.time_pulse_us(echo, level) measures: the width of the
+    echo that follows the last trigger, or -1 when there was no trigger since the last echo or
+    nothing lies within `max_mm` (the caller's timeout applies on top). `trigger()` is called on
+    each falling edge of TRIG.
     """
 
     def __init__(self, ray: ForwardRay, max_mm=4000.0, min_mm=20.0, noise_mm=1.0, seed=0):
@@ -205,16 +206,29 @@ class HCSR04Model:
         self.min_mm = min_mm
         self.noise_mm = noise_mm
         self._rng = random.Random(seed)
+        self._armed = False
+        self._trig_level = 0
         self.pings = 0
 
-    def echo_pulse_us(self, timeout_us: int) -> int:
+    def trig_driven(self, _pin, level) -> None:
+        """The program drove TRIG: a high-to-low transition ends the trigger pulse and fires a ping."""
+        if self._trig_level and not level:
+            self.trigger()
+        self._trig_level = 1 if level else 0
+
+    def trigger(self) -> None:
+        self._armed = True
         self.pings += 1
+
+    def echo_pulse_us(self, level: int = 1) -> int:
+        if not level or not self._armed:
+            return -1
+        self._armed = False
         distance = self.ray.range_mm()
         if distance > self.max_mm:
             return -1
         distance = max(self.min_mm, distance + self._rng.gauss(0.0, self.noise_mm))
-        width = int(round(2.0 * distance / SOUND_MM_PER_US))
-        return width if width <= timeout_us else -1
+        return int(round(2.0 * distance / SOUND_MM_PER_US))
 
 
 def sonar_ray(model, data, site="distance") -> ForwardRay:

@@ -107,22 +107,38 @@ def test_reading_moves_with_the_robot():
     assert g > 3 * r
 
 
-def test_mux_routes_a_channel_and_two_connected_same_address_sensors_collide():
+def test_mux_connects_a_channel_to_the_bus_and_two_same_address_sensors_collide():
     model, data = place("zones", 440, 120)
     probe, clock = GroundProbe(model, data), physics_clock_us(data)
-    mux = TCA9548AModel()
+    bus = {}
+    mux = TCA9548AModel(bus)
     left = TCS34725Model(probe, "color_0", clock)
     right = TCS34725Model(probe, "color_1", clock)
     mux.attach(0, 0x29, left)
     mux.attach(1, 0x29, right)
-    assert mux.downstream(0x29) is None  # everything off after power-up
+    assert bus == {0x70: mux}  # every channel off after power-up
     mux.write(b"\x02")
     assert mux.read(1) == b"\x02"
-    assert mux.downstream(0x29) is right
-    assert mux.addresses() == [0x29]
+    assert bus[0x29] is right
     mux.write(b"\x03")
     with pytest.raises(OSError, match="two devices answer at 0x29"):
-        mux.downstream(0x29).read_mem(CMD | 0x12, 1, 8)
+        bus[0x29].read_mem(CMD | 0x12, 1, 8)
+    mux.write(b"\x00")
+    assert 0x29 not in bus
+
+
+def test_mux_channel_and_a_chip_wired_straight_to_the_bus_collide_and_the_chip_comes_back():
+    model, data = place("zones", 440, 120)
+    probe, clock = GroundProbe(model, data), physics_clock_us(data)
+    bare = TCS34725Model(probe, "color_0", clock)
+    bus = {0x29: bare}
+    mux = TCA9548AModel(bus)
+    mux.attach(0, 0x29, TCS34725Model(probe, "color_1", clock))
+    mux.write(b"\x01")
+    with pytest.raises(OSError):
+        bus[0x29].read_mem(CMD | 0x12, 1, 8)
+    mux.write(b"\x00")
+    assert bus[0x29] is bare
 
 
 def test_a_missing_site_is_named():

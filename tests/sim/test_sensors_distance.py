@@ -98,20 +98,41 @@ def test_hcsr04_echo_is_the_round_trip_and_its_cone_catches_an_off_axis_pillar()
     model, data = in_arena(x, y, 0.0)
     laser = ForwardRay(model, data).range_mm()
     sonar = HCSR04Model(sonar_ray(model, data), noise_mm=0.0)
-    width = sonar.echo_pulse_us(30_000)
+    sonar.trigger()
+    width = sonar.echo_pulse_us(1)
     assert laser == pytest.approx(EAST_WALL_X_MM - (x + SITE_AHEAD_MM), abs=0.5)
     assert width * SOUND_MM_PER_US / 2 == pytest.approx(100.0 / math.cos(math.radians(7.5)), abs=12.0)
 
 
-def test_hcsr04_no_echo_inside_the_timeout_reads_minus_one():
+def test_hcsr04_echoes_once_per_trigger_pulse():
     model, data = in_arena()
     sonar = HCSR04Model(sonar_ray(model, data))
-    assert sonar.echo_pulse_us(30_000) > 0
-    assert sonar.echo_pulse_us(2_000) == -1  # 1.2 m needs ~7 ms of round trip
+    assert sonar.echo_pulse_us(1) == -1  # never triggered
+    sonar.trig_driven(18, 1)
+    assert sonar.echo_pulse_us(1) == -1  # TRIG still high: the burst leaves on the falling edge
+    sonar.trig_driven(18, 0)
+    width = sonar.echo_pulse_us(1)
+    assert width * SOUND_MM_PER_US / 2 == pytest.approx(1205.0, abs=5.0)
+    assert sonar.echo_pulse_us(1) == -1  # one echo per ping
+
+
+def test_hcsr04_nothing_within_range_gives_no_echo():
+    model, data = in_arena()
+    sonar = HCSR04Model(sonar_ray(model, data), max_mm=1000.0)
+    sonar.trigger()
+    assert sonar.echo_pulse_us(1) == -1
 
 
 def test_noise_is_seeded():
     model, data = in_arena()
     a = HCSR04Model(sonar_ray(model, data), seed=1)
     b = HCSR04Model(sonar_ray(model, data), seed=1)
-    assert [a.echo_pulse_us(30_000) for _ in range(5)] == [b.echo_pulse_us(30_000) for _ in range(5)]
+
+    def pings(sonar):
+        out = []
+        for _ in range(5):
+            sonar.trigger()
+            out.append(sonar.echo_pulse_us(1))
+        return out
+
+    assert pings(a) == pings(b)
