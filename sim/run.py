@@ -180,9 +180,21 @@ def run_program(
 
 
 def _peak_rss_mb():
+    """This process's peak resident memory, in MB.
+
+    Linux's VmHWM belongs to the running image; getrusage's maxrss would also count the parent's
+    memory at fork time, which makes a small child spawned by a big process look big.
+    """
+    try:
+        with open("/proc/self/status", encoding="ascii") as status:
+            for line in status:
+                if line.startswith("VmHWM:"):
+                    return round(int(line.split()[1]) / 1024, 1)
+    except OSError:
+        pass
     try:
         import resource
-    except ImportError:  # not on Windows
+    except ImportError:  # Windows
         return None
     peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
     return round(peak / (1024 * 1024 if sys.platform == "darwin" else 1024), 1)

@@ -59,12 +59,13 @@ class SimBoard:
 
     def set_input(self, pin, source):
         """Drive an input from outside; a constant level change fires the pin's IRQ like an edge would."""
-        old = self.input_level(pin)
-        self.inputs[pin] = source
-        new = self.input_level(pin)
         listener = self.pins.get(pin)
-        if listener is not None and old != new:
-            listener._edge(new)
+        old = listener.value() if listener is not None else None
+        self.inputs[pin] = source
+        if listener is not None and not listener._is_output():
+            new = listener.value()
+            if new != old:
+                listener._edge(new)
 
     def set_pulse(self, pin, source):
         self.pulses[pin] = source

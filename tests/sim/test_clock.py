@@ -1,0 +1,119 @@
+"""The simulated clock: Python timers fire at their due times while the physics follows in whole
+milliseconds, one physics call per stretch between due times."""
+
+import threading
+import time
+
+import pytest
+
+from openbricks_sim.clock import SimClock, SimStopped, SimTimeLimit
+
+
+class RecordingPhysics:
+    """Stands in for Physics: counts steps and remembers every step(n) call."""
+
+    def __init__(self):
+        self.now_ms = 0
+        self.calls = []
+
+    def step(self, n):
+        self.calls.append(n)
+        self.now_ms += n
+
+
+def test_periodic_timer_fires_at_each_due_time_with_the_physics_already_there():
+    physics = RecordingPhysics()
+    clock = SimClock(physics)
+    seen = []
+    clock.schedule(lambda: seen.append((clock.now_us(), physics.now_ms)), 10_000, 10_000)
+    clock.advance_us(35_000)
+    assert seen == [(10_000, 10), (20_000, 20), (30_000, 30)]
+    assert physics.calls == [10, 10, 10, 5], "one physics call per stretch between due times"
+    assert clock.now_us() == 35_000
+
+
+def test_a_long_sleep_with_nothing_due_is_one_physics_call():
+    physics = RecordingPhysics()
+    clock = SimClock(physics)
+    clock.advance_us(10_000_000)
+    assert physics.calls == [10_000]
+
+
+def test_sub_millisecond_sleeps_add_up_and_the_physics_follows_whole_milliseconds():
+    physics = RecordingPhysics()
+    clock = SimClock(physics)
+    for _ in range(3):
+        clock.advance_us(400)
+    assert clock.now_us() == 1200
+    assert physics.now_ms == 1  # the state at t = 1 ms; the next step completes at 2 ms
+    clock.advance_us(800)
+    assert physics.now_ms == 2
+
+
+def test_one_shot_timer_fires_once_and_a_cancelled_one_never():
+    physics = RecordingPhysics()
+    clock = SimClock(physics)
+    fired = []
+    clock.schedule(lambda: fired.append("once"), 5_000)
+    cancelled = clock.schedule(lambda: fired.append("cancelled"), 6_000, 1_000)
+    cancelled.cancel()
+    clock.advance_us(50_000)
+    assert fired == ["once"]
+
+
+def test_a_timer_callback_that_sleeps_moves_time_on_without_nesting_timers():
+    physics = RecordingPhysics()
+    clock = SimClock(physics)
+    order = []
+
+    def slow():
+        order.append(("slow starts", clock.now_us()))
+        clock.advance_us(5_000)  # a callback that blocks for 5 ms
+        order.append(("slow ends", clock.now_us()))
+
+    clock.schedule(slow, 1_000)
+    clock.schedule(lambda: order.append(("quick", clock.now_us())), 2_000)
+    clock.advance_us(10_000)
+    # The quick timer came due while slow() ran; it runs after slow() returns, late, as on a hub.
+    assert order == [("slow starts", 1_000), ("slow ends", 6_000), ("quick", 6_000)]
+    assert clock.now_us() == 10_000 and physics.now_ms == 10
+
+
+def test_time_limit_stops_the_physics_exactly_at_the_limit():
+    physics = RecordingPhysics()
+    clock = SimClock(physics, limit_ms=250)
+    clock.advance_us(200_000)
+    with pytest.raises(SimTimeLimit, match="250 ms"):
+        clock.advance_us(100_000)
+    assert physics.now_ms == 250 and clock.now_ms() == 250
+
+
+def test_stop_requested_from_another_thread_ends_the_next_sleep():
+    clock = SimClock(RecordingPhysics())
+    thread = threading.Thread(target=clock.request_stop)
+    thread.start()
+    thread.join()
+    with pytest.raises(SimStopped):
+        clock.advance_us(1_000)
+    clock.advance_us(1_000)  # the request is consumed: the next sleep runs normally
+
+
+def test_paced_run_never_gets_ahead_of_wall_time_times_speed():
+    clock = SimClock(RecordingPhysics(), speed=20.0)
+    started = time.perf_counter()
+    clock.advance_us(400_000)  # 400 ms at 20x: at least 20 ms of wall time
+    assert time.perf_counter() - started >= 0.019
+
+
+def test_rtc_follows_simulated_time_and_can_be_set():
+    clock = SimClock(RecordingPhysics(), epoch_ms=1_700_000_000_000)
+    clock.advance_us(1_500_000)
+    assert clock.epoch_us() == 1_700_000_001_500_000
+    clock.set_epoch_ms(1_800_000_000_000)
+    clock.advance_us(1_000)
+    assert clock.epoch_us() == 1_800_000_000_001_000
+
+
+def test_speed_must_be_positive():
+    with pytest.raises(ValueError, match="real-time factor"):
+        SimClock(RecordingPhysics(), speed=0)

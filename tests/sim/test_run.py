@@ -1,0 +1,120 @@
+"""Running a program file against a world: how it ends, what it printed, where the robot got to."""
+
+import json
+import os
+import subprocess
+import sys
+
+import pytest
+
+from openbricks_sim.run import ERROR, FINISHED, STOPPED, TIME_LIMIT, WALL_LIMIT, run_program
+
+DRIVE_FORWARD = """\
+import time
+from openbricks.drivers.st3032 import ST3032Motor
+
+left = ST3032Motor(1)
+right = ST3032Motor(2, invert=True)
+left.run_speed(360)
+right.run_speed(360)
+time.sleep_ms(2000)
+left.brake()
+right.brake()
+time.sleep_ms(300)
+print("done at", time.ticks_ms())
+"""
+
+
+def run(source, **kwargs):
+    return run_program("mission.py", source=source, **kwargs)
+
+
+def test_a_program_runs_to_its_end_and_the_robot_moved():
+    result = run(DRIVE_FORWARD)
+    assert result.exit == FINISHED, result.error
+    assert result.output.startswith("done at 23")
+    assert 2300 <= result.sim_ms < 2400
+    assert result.pose["x_mm"] > 500 and abs(result.pose["heading_deg"]) < 1.5
+    assert result.job["world"] == "empty" and result.job["chassis"] == "st3032"
+
+
+def test_an_exception_ends_the_run_with_the_programs_traceback():
+    result = run("import time\ntime.sleep_ms(10)\nraise ValueError('bad mission')\n")
+    assert result.exit == ERROR
+    assert 'File "mission.py", line 3' in result.error and "ValueError: bad mission" in result.error
+    assert result.sim_ms == 10
+
+
+def test_the_simulated_time_limit_ends_an_endless_program_exactly():
+    result = run("import time\nwhile True:\n    time.sleep_ms(100)\n", limit_ms=550)
+    assert result.exit == TIME_LIMIT and result.sim_ms == 550
+
+
+def test_a_program_that_catches_everything_still_cannot_outlive_the_limit():
+    source = """\
+import time
+while True:
+    try:
+        time.sleep_ms(100)
+    except Exception:
+        pass
+"""
+    assert run(source, limit_ms=300).exit == TIME_LIMIT
+
+
+def test_a_loop_that_never_lets_time_pass_hits_the_wall_limit_with_an_explanation():
+    result = run("x = 0\nwhile True:\n    x += 1\n", wall_limit_s=0.3)
+    assert result.exit == WALL_LIMIT
+    assert "time.sleep_ms" in result.error
+
+
+def test_sys_exit_is_a_normal_end_and_machine_reset_is_reported():
+    assert run("import sys\nsys.exit()\n").exit == FINISHED
+    assert run("import machine\nmachine.reset()\n").exit == "reset"
+
+
+def test_output_is_streamed_to_the_echo_as_it_is_printed():
+    lines = []
+    run("import time\nprint('a')\ntime.sleep_ms(5)\nprint('b')\n", echo=lines.append)
+    assert "".join(lines) == "a\nb\n"
+
+
+def test_a_stop_from_outside_ends_the_run():
+    from openbricks_sim.run import ProgramRun
+    from openbricks_sim.simulation import Simulation
+
+    sim = Simulation()
+    try:
+        program = ProgramRun(sim)
+        program.request_stop()
+        result = program.run("import time\ntime.sleep_ms(1000)\n")
+    finally:
+        sim.close()
+    assert result.exit == STOPPED and result.sim_ms == 0
+
+
+@pytest.mark.e2e
+def test_the_module_entry_point_runs_a_file_in_its_own_process_and_prints_json(tmp_path):
+    program = tmp_path / "mission.py"
+    program.write_text(DRIVE_FORWARD)
+    env = dict(os.environ)
+    # The child must import the same builds of the extensions as this process.
+    import openbricks_mjcontrol
+
+    import openbricks_native
+
+    paths = {os.path.dirname(openbricks_native.__file__), os.path.dirname(openbricks_mjcontrol.__file__)}
+    env["PYTHONPATH"] = os.pathsep.join([*paths, env.get("PYTHONPATH", "")])
+    out = subprocess.run(
+        [sys.executable, "-m", "openbricks_sim.run", str(program), "--json", "--limit-ms", "5000"],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        env=env,
+        cwd=tmp_path,
+    )
+    assert out.returncode == 0, out.stderr
+    result = json.loads(out.stdout)
+    assert result["exit"] == FINISHED and result["output"].startswith("done at")
+    assert result["pose"]["x_mm"] > 500
+    assert result["peak_rss_mb"] < 120, "the product's memory bar for a simulator process"
