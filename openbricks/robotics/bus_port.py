@@ -1,0 +1,224 @@
+"""Serial-bus motors after a DriveBase adopted them: their Motor calls, served by the bus engine.
+
+When a DriveBase adopts its serial-bus wheels it hands their UART to the bus engine
+(`_openbricks_native.serial_bus(uart_id)`: the firmware's C engine on the hard tick, the emulated
+one in the simulator), and every motor that was on that bus is re-routed here through
+`motor.adopt(port, slot)`, so `left.angle()`, `left.run_angle(...)` or an arm motor sharing the
+chain keep working.
+
+A wheel has exactly one driver at a time. Most of the time that is the drive base's controller.
+A direct motor command (run_speed, run_angle, hold, dc, ...) takes its wheel back the Pybricks way:
+the drive base's move ends, its other wheel is released, and a native servo controller on the
+slot's motor IO runs the command; the next drive base move takes both wheels again.
+
+The engine contract (shared with the simulator and the firmware; see sim_arch.md):
+`adopt(servo_id, invert=False) -> slot`, `motor_io(slot)` (a native MotorIO, or an object with
+`read_angle() -> deg | None`, `write_duty(pct)`, `coast()`), `angle_deg(slot)`, `speed_dps(slot)`,
+`load_pct(slot)`, `stats(slot) -> (replies, failed_reads, failed_in_a_row)`, `release(slot)`.
+Angles, speeds and loads are in the adopting motor's user frame (its invert applied).
+"""
+
+import time
+
+from micropython import const
+
+from openbricks.drivers.st3215 import not_responding_message
+
+_POLL_MS = const(5)
+# A wheel whose last reads all failed this many times in a row has stopped answering.
+SILENT_READS = const(3)
+
+
+def io_kwargs(io, side=None):
+    """Keyword arguments that connect a native controller to the engine's motor IO `io`.
+
+    A native MotorIO is ticked with no Python call (the simulator's wheels); anything else is driven
+    through its three Python methods. `side` names the DriveBase keyword ("left" / "right"), or None
+    for a Servo.
+    """
+    import _openbricks_native
+
+    motor_io = getattr(_openbricks_native, "MotorIO", None)
+    if motor_io is not None and isinstance(io, motor_io):
+        return {"io": io} if side is None else {side + "_io": io}
+    if side is None:
+        return {"read_angle": io.read_angle, "write_duty": io.write_duty, "write_coast": io.coast}
+    return {"read_" + side: io.read_angle, "write_" + side: io.write_duty, "coast_" + side: io.coast}
+
+
+class BusPort:
+    """What adopted motors on one bus talk to: the engine, and who drives each slot right now."""
+
+    def __init__(self, engine, bus):
+        self.engine = engine
+        self.bus = bus
+        self._motors = {}  # slot -> motor
+        self._offsets = {}  # slot -> reset_angle offset, degrees
+        self._servos = {}  # slot -> native Servo running a direct motor command
+        self._limits = {}  # slot -> duty cap (percent) set before the slot had a servo
+        self._base = None  # (native DriveBase, wheel slots) while a drive base drives its wheels
+
+    # --- adoption ----------------------------------------------------------------------
+
+    def adopt(self, motor):
+        """Move `motor` onto the engine and route its Motor calls here; returns its slot."""
+        slot = self.engine.adopt(motor.servo_id, invert=motor.invert)
+        self._motors[slot] = motor
+        self._offsets[slot] = 0.0
+        motor.adopt(self, slot)
+        return slot
+
+    def slot_of(self, motor):
+        for slot, known in self._motors.items():
+            if known is motor:
+                return slot
+        return None
+
+    def silent_error(self, slot):
+        """The manual's "not responding on the bus" OSError for `slot`, or None while it answers."""
+        replies, failed, in_a_row = self.engine.stats(slot)
+        if in_a_row < SILENT_READS and self.engine.angle_deg(slot) is not None:
+            return None
+        motor = self._motors[slot]
+        label = motor.side or type(motor).__name__
+        return OSError(
+            not_responding_message(label, motor.servo_id, slot, self.bus.where(), replies, failed, in_a_row)
+        )
+
+    # --- who drives the wheels ---------------------------------------------------------------
+
+    def give_to_drivebase(self, controller, slots):
+        """The drive base's controller drives `slots` from now on; direct commands there stand down."""
+        import _openbricks_native
+
+        process = _openbricks_native.motor_process
+        for slot in slots:
+            servo = self._servos.get(slot)
+            if servo is not None:
+                process.unsubscribe(servo)
+        self._base = (controller, slots)
+        process.subscribe(controller)
+
+    def _take_from_drivebase(self, slot):
+        base = self._base
+        if base is None or slot not in base[1]:
+            return
+        import _openbricks_native
+
+        controller, slots = base
+        self._base = None
+        controller.stop("coast")  # releases both wheels now; the other one stays free
+        _openbricks_native.motor_process.unsubscribe(controller)
+
+    def _servo(self, slot):
+        """The native servo controller that runs direct commands on `slot`, now driving it."""
+        import _openbricks_native
+
+        self._take_from_drivebase(slot)
+        servo = self._servos.get(slot)
+        if servo is None:
+            motor = self._motors[slot]
+            kwargs = io_kwargs(self.engine.motor_io(slot))
+            kwargs["max_speed_dps"] = motor.max_dps
+            if motor.accel_dps2 > 0:  # 0 is the servo's "no ramp"; the native default ramps steeply
+                kwargs["accel_dps2"] = motor.accel_dps2
+            servo = _openbricks_native.Servo(counts_per_rev=4096, **kwargs)
+            if slot in self._limits:
+                servo.set_duty_limit(self._limits[slot])
+            self._servos[slot] = servo
+        _openbricks_native.motor_process.subscribe(servo)
+        return servo
+
+    def _checked(self, slot):
+        error = self.silent_error(slot)
+        if error is not None:
+            raise error
+
+    # --- the Motor calls of an adopted motor (user frame, slot first) --------------------------
+
+    def angle(self, slot):
+        raw = self.engine.angle_deg(slot)
+        return None if raw is None else raw + self._offsets[slot]
+
+    def reset_angle(self, slot, angle=0):
+        self._checked(slot)
+        self._offsets[slot] = angle - self.engine.angle_deg(slot)
+
+    def speed(self, slot):
+        if self.engine.angle_deg(slot) is None:
+            return None
+        return self.engine.speed_dps(slot)
+
+    def load(self, slot):
+        if self.engine.angle_deg(slot) is None:
+            return None
+        return self.engine.load_pct(slot) / 100 * self._motors[slot].STALL_TORQUE_MNM
+
+    def stalled(self, slot):
+        self._checked(slot)
+        servo = self._servos.get(slot)
+        if servo is not None and self._base is None:
+            return servo.stalled()
+        motor = self._motors[slot]
+        pushing = abs(self.engine.load_pct(slot)) >= motor.STALL_LOAD_PCT
+        return pushing and abs(self.engine.speed_dps(slot)) <= motor.STALL_SPEED_DPS
+
+    def run_speed(self, slot, deg_per_s):
+        self._checked(slot)
+        self._servo(slot).run_speed(deg_per_s)
+
+    def dc(self, slot, duty):
+        self._checked(slot)
+        self._servo(slot).dc(max(-100, min(100, duty)))
+
+    def brake(self, slot):
+        # Like the servo's own brake: ramp to zero speed and hold that rate.
+        self._servo(slot).run_speed(0)
+
+    def coast(self, slot):
+        self._servo(slot).coast()
+
+    def hold(self, slot):
+        self._checked(slot)
+        self._servo(slot).hold()
+
+    def set_duty_limit(self, slot, limit_pct):
+        self._limits[slot] = limit_pct
+        servo = self._servos.get(slot)
+        if servo is not None:
+            servo.set_duty_limit(limit_pct)
+
+    def run_angle(self, slot, deg_per_s, target_angle, wait=True, then="coast"):
+        if deg_per_s == 0:
+            raise ValueError("run_angle(deg_per_s=0): the move would never finish; give a non-zero speed")
+        self._checked(slot)
+        servo = self._servo(slot)
+        servo.run_angle(abs(deg_per_s), target_angle, then=then)
+        if wait:
+            while not self.done(slot):
+                time.sleep_ms(_POLL_MS)
+
+    def done(self, slot):
+        servo = self._servos.get(slot)
+        if servo is None:
+            return True
+        if servo.feedback_lost:
+            raise self.silent_error(slot) or OSError(
+                "%s lost its position feedback mid-move" % (self._motors[slot].side or "the motor")
+            )
+        return servo.done()
+
+    def release_all(self):
+        """Hand every slot back to the engine (coasting); the motors stay unusable until re-adopted."""
+        import _openbricks_native
+
+        process = _openbricks_native.motor_process
+        if self._base is not None:
+            process.unsubscribe(self._base[0])
+            self._base = None
+        for slot in list(self._motors):
+            servo = self._servos.pop(slot, None)
+            if servo is not None:
+                process.unsubscribe(servo)
+            self._motors.pop(slot).adopt(None, None)
+            self.engine.release(slot)

@@ -1,0 +1,64 @@
+"""Keeps `motor_process` ticking: the 1 kHz clock every native controller (DriveBase, Servo) runs on.
+
+On the hub the firmware ticks the scheduler below Python (its hard tick), and in the simulator the
+physics step ticks it from MuJoCo's control callback. A host that has only the plain extension (the
+CPython test runs) has nothing that ticks it, so the runtime starts the tick the way the firmware's
+frozen boot did before the hard tick existed: a periodic `machine.Timer` calling
+`motor_process.tick(time.ticks_ms())`. Starting a second tick where one already runs would run every
+controller twice per millisecond, so the native module is asked first (`ticks_itself`, when it says),
+and otherwise the scheduler is watched for a few milliseconds to see whether anything else ticks it.
+"""
+
+import time
+
+from micropython import const
+
+_TICK_HZ = const(1000)
+# Long enough for at least two ticks of a running 1 kHz tick, even with a late one in between.
+_PROBE_MS = const(5)
+# A virtual timer where the port has them; only hosts without a native tick ever reach this.
+_TIMER_ID = const(-1)
+
+_state = {"timer": None}
+
+
+def _tick(_timer):
+    import _openbricks_native
+
+    _openbricks_native.motor_process.tick(time.ticks_ms())
+
+
+def _ticked_elsewhere(native):
+    says = getattr(native, "ticks_itself", None)
+    if says is not None:
+        return bool(says() if callable(says) else says)
+    process = native.motor_process
+    before = process.tick_count
+    time.sleep_ms(_PROBE_MS)
+    return process.tick_count != before
+
+
+def ensure_running():
+    """Make sure motor_process is ticked at 1 kHz; start a machine.Timer tick if nothing else does it.
+
+    Called by every controller that subscribes to motor_process (a DriveBase at construction). Cheap
+    to repeat: a tick that is running, ours or the runtime's, is left alone.
+    """
+    import _openbricks_native
+
+    if _ticked_elsewhere(_openbricks_native):
+        return False
+    from machine import Timer
+
+    timer = _state["timer"]
+    if timer is None:
+        timer = _state["timer"] = Timer(_TIMER_ID)
+    timer.init(mode=Timer.PERIODIC, freq=_TICK_HZ, callback=_tick)
+    return True
+
+
+def stop():
+    """Stop the tick this module started (tests; a program never needs to)."""
+    timer = _state["timer"]
+    if timer is not None:
+        timer.deinit()

@@ -1,0 +1,232 @@
+"""How a DriveBase's two motors are connected to its controller, by motor family.
+
+- Serial-bus servos (ST3215Motor, ST3032Motor): adopted onto the bus engine, which drives each
+  wheel's bridge in duty mode and reads its encoder; the controller ticks through the engine's
+  motor IO (natively in the simulator and on the hub).
+- Encoder motors (JGB37Motor, MG370Motor): the controller reads the encoder and writes the bridge
+  that the motor's own native servo core otherwise drives; that servo stands down while the drive
+  base drives.
+- Anything else with dc/brake/coast (L298NMotor, TB6612Motor, or an encoder motor on a build without
+  the native cores): open loop. No feedback, so no controller.
+
+Each pair answers the same questions for the DriveBase: the controller's IO keywords, how to make the
+controller the one driver of both wheels, whether both wheels still answer, and what a watchdog halt
+means in words the user can act on.
+"""
+
+import time
+
+from micropython import const
+
+from openbricks.drivers.st3215 import not_responding_message
+from openbricks.robotics.bus_port import BusPort, io_kwargs
+
+SIDES = ("left", "right")
+# How long a freshly adopted wheel may take to deliver its first reading (a hard-tick engine reads
+# every slot a few times in this window).
+_FIRST_READING_MS = const(50)
+
+_ports = {}  # uart id -> BusPort of the engine that owns that UART
+
+
+def _is_serial_bus(motor):
+    return hasattr(motor, "adopt") and hasattr(getattr(motor, "bus", None), "hand_over")
+
+
+def _is_encoder_motor(motor):
+    # The native servo core's three IO hooks; _servo is None on a build without the cores.
+    return getattr(motor, "_servo", None) is not None and hasattr(motor, "_sensor_deg")
+
+
+def pair_for(left, right):
+    """The pair class that fits `left` and `right`, built; raises when they cannot share a chassis."""
+    for side, motor in (("left", left), ("right", right)):
+        for method in ("dc", "brake", "coast"):
+            if not callable(getattr(motor, method, None)):
+                raise TypeError(
+                    "DriveBase %s motor: %r is not a motor (it has no %s()); pass motor objects such as "
+                    "ST3032Motor, JGB37Motor or L298NMotor" % (side, motor, method)
+                )
+    if left is right:
+        raise ValueError("DriveBase: left and right are the same motor object; give it two motors")
+    kinds = [
+        "serial-bus" if _is_serial_bus(m) else "encoder" if _is_encoder_motor(m) else "open-loop"
+        for m in (left, right)
+    ]
+    if kinds[0] != kinds[1]:
+        raise TypeError(
+            "DriveBase: the left motor is a %s motor (%s) but the right one is a %s motor (%s); both "
+            "wheels need the same kind of feedback to be driven as one chassis"
+            % (kinds[0], type(left).__name__, kinds[1], type(right).__name__)
+        )
+    if kinds[0] == "serial-bus":
+        return SerialBusPair(left, right)
+    if kinds[0] == "encoder":
+        return EncoderPair(left, right)
+    return OpenLoopPair(left, right)
+
+
+class _Pair:
+    kind = ""
+    closed_loop = True
+
+    def __init__(self, left, right):
+        self.motors = (left, right)
+
+    def check(self):
+        """Raise if a wheel has stopped answering; a pair that cannot tell does nothing."""
+
+    def fault_error(self, sides, native_error):
+        """The error for a watchdog halt on `sides` ("left", "right", "gyro")."""
+        return native_error
+
+
+class EncoderPair(_Pair):
+    kind = "encoder"
+
+    def controller_io(self):
+        io = {}
+        for i, side in enumerate(SIDES):
+            motor = self.motors[i]
+            io["read_" + side] = motor._sensor_deg
+            io["write_" + side] = motor._write_duty
+            io["coast_" + side] = motor._bridge.coast
+        return io
+
+    def take(self, controller):
+        import _openbricks_native
+
+        process = _openbricks_native.motor_process
+        for motor in self.motors:
+            process.unsubscribe(motor._servo)  # one driver per bridge
+        process.subscribe(controller)
+
+    def release(self, controller):
+        import _openbricks_native
+
+        _openbricks_native.motor_process.unsubscribe(controller)
+
+
+class OpenLoopPair(_Pair):
+    kind = "open-loop"
+    closed_loop = False
+
+
+class SerialBusPair(_Pair):
+    """Two serial-bus wheels adopted onto the bus engine (8.2): one controller, no Python loop."""
+
+    kind = "serial-bus"
+
+    def __init__(self, left, right):
+        _Pair.__init__(self, left, right)
+        serial_bus = _engine_factory(left)
+        for i, side in enumerate(SIDES):
+            motor = self.motors[i]
+            motor.set_label(side + " wheel", motor.slot)
+            if not motor.bus.handed_over and not motor.ping():
+                replies, failed, in_a_row = motor.bus.stats(motor.servo_id)
+                raise OSError(
+                    not_responding_message(
+                        side + " wheel", motor.servo_id, None, motor.bus.where(), replies, failed, in_a_row
+                    )
+                )
+        self.wheels = tuple(_adopt(motor, serial_bus) for motor in self.motors)
+        for port, _slot in self.wheels:
+            _adopt_rest_of_chain(port)
+        for i, side in enumerate(SIDES):
+            self.motors[i].set_label(side + " wheel", self.wheels[i][1])
+        self._await_first_readings()
+        self.check()
+
+    def _await_first_readings(self):
+        deadline = time.ticks_add(time.ticks_ms(), _FIRST_READING_MS)
+        for port, slot in self.wheels:
+            while port.engine.angle_deg(slot) is None:
+                if time.ticks_diff(deadline, time.ticks_ms()) <= 0:
+                    break
+                time.sleep_ms(1)
+
+    def controller_io(self):
+        io = {}
+        for i, side in enumerate(SIDES):
+            port, slot = self.wheels[i]
+            io.update(io_kwargs(port.engine.motor_io(slot), side))
+        return io
+
+    def take(self, controller):
+        by_port = {}
+        for port, slot in self.wheels:
+            by_port.setdefault(id(port), (port, []))[1].append(slot)
+        for port, slots in by_port.values():
+            port.give_to_drivebase(controller, slots)
+
+    def release(self, controller):
+        import _openbricks_native
+
+        _openbricks_native.motor_process.unsubscribe(controller)
+
+    def check(self):
+        for port, slot in self.wheels:
+            error = port.silent_error(slot)
+            if error is not None:
+                raise error
+
+    def fault_error(self, sides, native_error):
+        for i, side in enumerate(SIDES):
+            port, slot = self.wheels[i]
+            if side in sides:
+                error = port.silent_error(slot)
+                if error is not None:
+                    return error
+                # Silent long enough to halt, answering again by now: still name the wheel.
+                motor = self.motors[i]
+                replies, failed, in_a_row = port.engine.stats(slot)
+                return OSError(
+                    not_responding_message(
+                        side + " wheel", motor.servo_id, slot, port.bus.where(), replies, failed, in_a_row
+                    )
+                )
+        return native_error
+
+
+def _adopt(motor, serial_bus):
+    """(port, slot) of `motor` on its bus' engine, handing the UART over on first use."""
+    bus = motor.bus
+    port = _ports.get(bus.uart_id)
+    if port is None or port.bus is not bus:
+        if bus.handed_over:
+            raise RuntimeError(
+                "UART%d was handed to a bus engine this runtime no longer knows; restart the program"
+                % bus.uart_id
+            )
+        uart_id = bus.hand_over()[0]
+        port = _ports[uart_id] = BusPort(serial_bus(uart_id), bus)
+    slot = port.slot_of(motor)
+    if slot is None:
+        slot = port.adopt(motor)
+    return port, slot
+
+
+def _adopt_rest_of_chain(port):
+    """Adopt every other motor on the port's bus: with the UART handed over, a motor left behind would
+    be talking into a closed UART. Position-mode servos (no adopt()) say so clearly when used."""
+    for device in port.bus.devices:
+        if hasattr(device, "adopt") and port.slot_of(device) is None:
+            port.adopt(device)
+
+
+def _engine_factory(motor):
+    """`_openbricks_native.serial_bus`, or the error 8.2 asks for when this runtime has no engine."""
+    try:
+        import _openbricks_native
+    except ImportError:
+        _openbricks_native = None
+    serial_bus = getattr(_openbricks_native, "serial_bus", None)
+    if serial_bus is None:
+        raise RuntimeError(
+            "DriveBase over serial-bus motors needs the native bus engine (the hub firmware's hard tick, "
+            "or the simulator's emulated bus) and this runtime has none, so there is no controller for "
+            "%s (servo id %d on %s); run the program on an openbricks hub or in `openbricks sim`"
+            % (type(motor).__name__, motor.servo_id, motor.bus.where())
+        )
+    return serial_bus
