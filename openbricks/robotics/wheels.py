@@ -26,6 +26,12 @@ SIDES = ("left", "right")
 # every slot a few times in this window).
 _FIRST_READING_MS = const(50)
 
+_KIND_PHRASES = {
+    "serial-bus": "a serial-bus servo",
+    "encoder": "an encoder motor",
+    "open-loop": "an open-loop motor",
+}
+
 _ports = {}  # uart id -> BusPort of the engine that owns that UART
 
 
@@ -55,9 +61,9 @@ def pair_for(left, right):
     ]
     if kinds[0] != kinds[1]:
         raise TypeError(
-            "DriveBase: the left motor is a %s motor (%s) but the right one is a %s motor (%s); both "
-            "wheels need the same kind of feedback to be driven as one chassis"
-            % (kinds[0], type(left).__name__, kinds[1], type(right).__name__)
+            "DriveBase: the left motor (%s) is %s but the right one (%s) is %s; both wheels need the same "
+            "kind of feedback to be driven as one chassis"
+            % (type(left).__name__, _KIND_PHRASES[kinds[0]], type(right).__name__, _KIND_PHRASES[kinds[1]])
         )
     if kinds[0] == "serial-bus":
         return SerialBusPair(left, right)
