@@ -120,16 +120,58 @@ def time_ns():
     return epoch_us() * 1000
 
 
+# The calendar is computed here rather than borrowed from the host's time module: CPython's
+# gmtime returns a 9-field struct_time and its mktime reads the tuple as *local* time (so the fake
+# RTC drifted by the machine's UTC offset), while MicroPython's return and take plain 8-tuples in UTC.
+# Doing the arithmetic once gives both interpreters the hub's behaviour: UTC, no time zone.
+_DAYS_BEFORE_MONTH = (0, 31, 59, 90, 120, 151, 181, 212, 243, 273, 304, 334)
+_WEEKDAY_OF_1970_01_01 = 3  # a Thursday; weekdays count from Monday = 0
+
+
+def _is_leap(year):
+    return year % 4 == 0 and (year % 100 != 0 or year % 400 == 0)
+
+
+def _days_before_year(year):
+    """Days from 1970-01-01 to January 1st of `year` (negative before 1970)."""
+    y = year - 1
+    return y * 365 + y // 4 - y // 100 + y // 400 - 719162
+
+
+def _days_before_month(year, month):
+    return _DAYS_BEFORE_MONTH[month - 1] + (1 if month > 2 and _is_leap(year) else 0)
+
+
 def gmtime(secs=None):
-    return _host_time.gmtime(time() if secs is None else secs)
+    """(year, month, mday, hour, minute, second, weekday, yearday), as MicroPython returns it."""
+    secs = time() if secs is None else int(secs)
+    days, rest = divmod(secs, 86400)
+    year = 1970 + days // 366  # close; the loops settle it (it can start high before 1970)
+    while _days_before_year(year) > days:
+        year -= 1
+    while _days_before_year(year + 1) <= days:
+        year += 1
+    yday = days - _days_before_year(year)
+    month = 12
+    while _days_before_month(year, month) > yday:
+        month -= 1
+    mday = yday - _days_before_month(year, month) + 1
+    weekday = (days + _WEEKDAY_OF_1970_01_01) % 7
+    return (year, month, mday, rest // 3600, rest // 60 % 60, rest % 60, weekday, yday + 1)
 
 
 def localtime(secs=None):
-    return gmtime(secs)
+    return gmtime(secs)  # the hub keeps UTC
 
 
 def mktime(tup):
-    return _host_time.mktime(tup)
+    """Seconds since 1970 for a gmtime()-style tuple (8 or 9 fields); out-of-range fields carry
+    over into the next larger one, as on both interpreters."""
+    year, month, mday, hour, minute, second = tup[:6]
+    year += (month - 1) // 12
+    month = (month - 1) % 12 + 1
+    days = _days_before_year(year) + _days_before_month(year, month) + mday - 1
+    return ((days * 24 + hour) * 60 + minute) * 60 + second
 
 
 MICROPYTHON_TIME_NAMES = (
