@@ -1,0 +1,183 @@
+"""DriveBase on two ST-3032 serial-bus servos: adopted onto a bus engine that speaks SCS to the fake servos.
+
+The engine (fakes.serial_bus_engine) stands in for the firmware's hard-tick engine and the simulator's
+emulated one: it owns the UART after the hand-over, drives each servo in open-loop duty mode and
+counts the reads that went unanswered.
+"""
+
+import time
+
+import _openbricks_native
+
+from fakes import serial_bus_engine
+from fakes.expect import approx, raises
+from fakes.scs_servo import REG_TORQUE_ENABLE
+from tests.openbricks.robotics.robots import SERVO_WHEEL_MM, ServoRobot
+
+NEEDS_NATIVE = True
+
+MM_PER_WHEEL_DEG = 3.141592653589793 * SERVO_WHEEL_MM / 360
+
+
+def test_construction_hands_the_uart_to_the_engine_and_adopts_both_wheels():
+    robot = ServoRobot()
+    robot.drivebase()
+    assert robot.left.bus.handed_over
+    assert (robot.left.slot, robot.right.slot) == (0, 1)
+    assert (robot.left.side, robot.right.side) == ("left wheel", "right wheel")
+    assert [servo.mode for servo in robot.servos] == [2, 2]  # open-loop duty: the engine closes the loop
+
+
+def test_straight_and_turn_through_the_engine_land_on_target():
+    robot = ServoRobot()
+    db = robot.drivebase()
+    db.straight(300)
+    chassis = robot.chassis
+    assert approx(chassis.x_mm, 300, 2)
+    assert approx(chassis.heading_deg, 0, 0.5)
+    # The mirror-mounted right servo turned its own shaft backward for the same travel.
+    assert approx(robot.servos[1].angle_deg(), -300 / MM_PER_WHEEL_DEG, 3)
+    db.turn(90)
+    assert approx(chassis.heading_deg, 90, 1)
+
+
+def test_stop_coast_cuts_the_torque_of_both_servos():
+    robot = ServoRobot()
+    db = robot.drivebase()
+    db.drive(150, 0)
+    time.sleep_ms(400)
+    db.stop()
+    time.sleep_ms(2)
+    assert [servo.reg16(REG_TORQUE_ENABLE) & 0xFF for servo in robot.servos] == [0, 0]
+
+
+def test_stop_hold_with_wait_blocks_until_the_robot_is_at_rest():
+    robot = ServoRobot()
+    db = robot.drivebase()
+    db.drive(200, 0)
+    time.sleep_ms(600)
+    db.stop(then="hold", wait=True)
+    assert abs(robot.servos[0].speed_dps()) < 5 and abs(robot.servos[1].speed_dps()) < 5
+    x = robot.chassis.x_mm
+    time.sleep_ms(300)
+    assert approx(robot.chassis.x_mm, x, 0.5)
+
+
+def test_move_wheels_sets_both_wheel_speeds():
+    robot = ServoRobot()
+    db = robot.drivebase()
+    db.move_wheels(200, 120)
+    time.sleep_ms(800)
+    assert approx(robot.servos[0].speed_dps(), 200, 10)
+    assert approx(-robot.servos[1].speed_dps(), 120, 10)
+    db.stop()
+
+
+def test_settings_turn_acceleration_shapes_only_the_turns():
+    robot = ServoRobot()
+    db = robot.drivebase()
+    db.settings(turn_acceleration=300)
+    assert db.settings() == (360.0, 360.0, 1500.0, 300.0)
+    start = time.ticks_ms()
+    db.turn(90)
+    slow_turn_ms = time.ticks_diff(time.ticks_ms(), start)
+    db.settings(turn_acceleration=1500)
+    start = time.ticks_ms()
+    db.turn(90)
+    assert time.ticks_diff(time.ticks_ms(), start) < slow_turn_ms - 300
+
+
+def test_a_silent_servo_at_construction_raises_naming_side_id_uart_and_pins():
+    robot = ServoRobot(silent_ids=(2,))
+    with raises(OSError, "motor is not responding on the bus: right wheel (servo id 2)") as caught:
+        robot.drivebase()
+    message = str(caught.value)
+    assert "on UART1 tx=14 rx=41" in message
+    assert "`openbricks servo-id --scan`" in message
+    assert not robot.left.bus.handed_over  # found before the UART changed hands
+
+
+def test_a_wheel_going_silent_mid_move_halts_both_and_raises_naming_the_motor():
+    robot = ServoRobot()
+    db = robot.drivebase()
+    db.straight(500, wait=False)
+    time.sleep_ms(400)
+    robot.servos[0].silent = True  # the left wheel's cable works loose
+    with raises(
+        OSError, "motor is not responding on the bus: left wheel (servo id 1, slot 0) on UART1"
+    ) as caught:
+        while not db.done():
+            time.sleep_ms(10)
+    assert "failed reads" in str(caught.value)
+    # Halted at once: the right wheel was released rather than driven on alone.
+    assert robot.servos[1].reg16(REG_TORQUE_ENABLE) & 0xFF == 0
+    assert robot.chassis.x_mm < 300
+
+
+def test_check_motors_raises_once_a_wheel_stops_answering_and_moves_refuse():
+    robot = ServoRobot()
+    db = robot.drivebase()
+    db.check_motors()
+    robot.servos[1].silent = True
+    with raises(OSError, "right wheel (servo id 2, slot 1) on UART1 tx=14 rx=41"):
+        db.check_motors()
+    with raises(OSError, "not responding on the bus: right wheel"):
+        db.straight(100)
+    robot.servos[1].silent = False
+    db.straight(100)  # answering again: moves work again
+    assert approx(robot.chassis.x_mm, 100, 2)
+
+
+def test_without_a_bus_engine_construction_raises_instead_of_degrading():
+    robot = ServoRobot(engine=False)
+    with raises(RuntimeError, "needs the native bus engine") as caught:
+        robot.drivebase()
+    assert "ST3032Motor (servo id 1 on UART1 tx=14 rx=41)" in str(caught.value)
+    assert not robot.left.bus.handed_over
+    robot.left.run_speed(100)  # the motors still work on their own bus
+
+
+def test_adopted_motors_keep_their_motor_api_and_take_their_wheel_from_the_drive_base():
+    robot = ServoRobot()
+    db = robot.drivebase()
+    db.straight(100)
+    assert approx(robot.left.angle(), 100 / MM_PER_WHEEL_DEG, 2)
+    robot.left.reset_angle(0)
+    robot.left.run_angle(300, 180)  # a direct command: the drive base lets go of its wheels
+    assert approx(robot.left.angle(), 180, 2)
+    assert approx(robot.servos[0].angle_deg(), 100 / MM_PER_WHEEL_DEG + 180, 3)
+    robot.right.run_speed(90)
+    time.sleep_ms(600)
+    assert approx(robot.right.speed(), 90, 8)
+    assert approx(robot.servos[1].speed_dps(), -90, 8)  # in the motor's own (inverted) frame
+    db.stop()  # the drive base takes both wheels back: the right one's own speed loop stands down
+    time.sleep_ms(300)
+    heading, travel = robot.chassis.heading_deg, robot.chassis.travel_mm
+    assert abs(robot.servos[1].speed_dps()) < 1
+    assert _openbricks_native.motor_process.count == 1  # one driver for both wheels: the drive base
+    db.straight(50)
+    assert approx(robot.chassis.travel_mm - travel, 50, 1.5)
+    assert approx(robot.chassis.heading_deg, heading, 0.5)
+
+
+def test_other_motors_on_the_chain_are_adopted_too_and_keep_working():
+    robot = ServoRobot(extra_ids=(5,))
+    robot.drivebase()
+    arm = robot.extras[0]
+    assert arm.slot == 2
+    arm.run_angle(200, 90)
+    assert approx(robot.bus.servo(5).angle_deg(), 90, 2)
+
+
+def test_a_second_drive_base_over_the_same_wheels_reuses_their_slots():
+    robot = ServoRobot()
+    robot.drivebase()
+    db = robot.drivebase()
+    assert len(robot.engine().slots) == 2
+    db.straight(100)
+    assert approx(robot.chassis.x_mm, 100, 2)
+
+
+def test_the_engine_is_only_installed_for_these_tests():
+    serial_bus_engine.uninstall()
+    assert not hasattr(_openbricks_native, "serial_bus")
