@@ -31,6 +31,9 @@ def native_module(serial_bus):
         if not name.startswith("__"):
             setattr(module, name, getattr(openbricks_native, name))
     module.serial_bus = serial_bus
+    # The physics step ticks motor_process (as the firmware's hard tick does on a hub): the runtime
+    # must not start a Timer tick of its own (openbricks.robotics.tick asks this).
+    module.ticks_itself = True
     return module
 
 
