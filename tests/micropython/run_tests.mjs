@@ -44,6 +44,35 @@ function parseArgs(argv) {
   return options;
 }
 
+// What a step printed is kept for its report, but a runaway printer must not bloat the JSON or
+// this process: past OUTPUT_HEAD + OUTPUT_TAIL characters only the start and the end are kept,
+// where the clues usually are.
+const OUTPUT_HEAD = 4_096;
+const OUTPUT_TAIL = 12_288;
+
+class StepOutput {
+  constructor() {
+    this.head = "";
+    this.tail = "";
+    this.total = 0;
+  }
+
+  add(text) {
+    this.total += text.length;
+    const room = OUTPUT_HEAD - this.head.length;
+    if (room > 0) {
+      this.head += text.slice(0, room);
+      text = text.slice(room);
+    }
+    this.tail = (this.tail + text).slice(-OUTPUT_TAIL);
+  }
+
+  text() {
+    const left = this.total - this.head.length - this.tail.length;
+    return left > 0 ? `${this.head}\n[... ${left} characters of output left out ...]\n${this.tail}` : this.head + this.tail;
+  }
+}
+
 // The queue of jobs, consumed by one worker at a time; a worker that times out or dies is
 // replaced and the queue continues where it stopped.
 class Run {
@@ -126,14 +155,14 @@ class Run {
         stderr: true,
       });
       let step = null;
-      let output = "";
+      let output = new StepOutput();
       let timer = null;
       let finished = false;
 
       // Anything the interpreter writes outside the captured stdout/stderr callbacks
       // (Emscripten's own warnings) belongs to the step that was running.
-      worker.stdout.on("data", (chunk) => (output += chunk));
-      worker.stderr.on("data", (chunk) => (output += chunk));
+      worker.stdout.on("data", (chunk) => output.add(String(chunk)));
+      worker.stderr.on("data", (chunk) => output.add(String(chunk)));
 
       const finish = (failure) => {
         if (finished) return;
@@ -141,7 +170,7 @@ class Run {
         clearTimeout(timer);
         let outcome = { done: true };
         if (failure && step === null) outcome = { stalled: failure };
-        else if (failure) this.abandon(step, output, failure);
+        else if (failure) this.abandon(step, output.text(), failure);
         worker.terminate().then(() => resolve(outcome));
       };
       const arm = (what) => {
@@ -153,7 +182,7 @@ class Run {
             total
               ? `stopped: the whole MicroPython run exceeded ${this.options.totalTimeoutMs} ms (--total-timeout-ms)`
               : `timed out: ${what} took longer than ${this.options.stepTimeoutMs} ms (--step-timeout-ms); ` +
-                "a loop that never sleeps, or waits for a condition the fakes never produce?",
+                "an endless loop, or a wait for something the fakes never produce?",
           );
         }, limit);
       };
@@ -170,16 +199,16 @@ class Run {
           clearTimeout(timer);
           next();
         } else if (msg.type === "output") {
-          output += msg.text;
+          output.add(msg.text);
         } else if (msg.type === "begin") {
           step = msg.step;
-          output = "";
+          output = new StepOutput();
           arm(step.kind === "test" ? `test ${step.name}` : `importing ${step.module}`);
         } else if (msg.type === "end") {
           clearTimeout(timer);
-          this.record(step, msg.result, output);
+          this.record(step, msg.result, output.text());
           step = null;
-          output = "";
+          output = new StepOutput();
         } else if (msg.type === "idle") {
           this.jobs.shift();
           next();

@@ -14,8 +14,26 @@ const { repoRoot, packageDir, heapBytes, files } = workerData;
 const FS_ROOT = "/repo";
 const HARNESS_DIR = "/harness";
 
-const decoder = new TextDecoder();
-const forward = (stream) => (bytes) => parentPort.postMessage({ type: "output", stream, text: decoder.decode(bytes) });
+// Output is forwarded a line at a time (or every OUTPUT_CHUNK bytes of a line that never ends):
+// per byte would cost a message each, and holding it to the end of a step would lose what a test
+// printed before it hung.
+const OUTPUT_CHUNK = 4096;
+const pending = { stdout: [], stderr: [] };
+const decoders = { stdout: new TextDecoder(), stderr: new TextDecoder() };
+
+function flushOutput(stream) {
+  if (pending[stream].length === 0) return;
+  const text = decoders[stream].decode(new Uint8Array(pending[stream]), { stream: true });
+  pending[stream] = [];
+  parentPort.postMessage({ type: "output", stream, text });
+}
+
+const forward = (stream) => (bytes) => {
+  for (const byte of bytes) {
+    pending[stream].push(byte);
+    if (byte === 10 || pending[stream].length >= OUTPUT_CHUNK) flushOutput(stream);
+  }
+};
 
 const { loadMicroPython } = await import(path.join(packageDir, "micropython.mjs"));
 const mp = await loadMicroPython({
@@ -53,7 +71,10 @@ const harness = mp.pyimport("harness");
 
 function call(fnName, ...args) {
   // Every harness function returns a JSON string; a JS exception here means the harness itself broke.
-  return JSON.parse(harness[fnName](...args));
+  const result = JSON.parse(harness[fnName](...args));
+  flushOutput("stdout");
+  flushOutput("stderr");
+  return result;
 }
 
 parentPort.postMessage({ type: "ready", interpreter: call("interpreter") });
