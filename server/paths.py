@@ -1,0 +1,60 @@
+"""Where the host keeps its files: every user-directory path goes through this module.
+
+Two roots, each overridable so tests (and users with odd setups) can move them:
+
+- the data dir (``OPENBRICKS_DATA_DIR``; default ``~/.local/share/openbricks`` on Linux): state that must
+  survive, such as hub locks and the virtual-hub registry;
+- the cache dir (``OPENBRICKS_CACHE_DIR``; default ``~/.cache/openbricks``): things that can be fetched
+  again, such as downloaded firmware releases and rendered docs.
+
+Directories are created on first use, not at import, so `openbricks --help` touches no disk.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+APP_NAME = "openbricks"
+DATA_DIR_ENV = "OPENBRICKS_DATA_DIR"
+CACHE_DIR_ENV = "OPENBRICKS_CACHE_DIR"
+
+
+def _from_env_or(env: str, default) -> Path:
+    value = os.environ.get(env)
+    return Path(value).expanduser() if value else default()
+
+
+def data_dir() -> Path:
+    """Root of the state that must survive restarts."""
+    import platformdirs
+
+    return _from_env_or(DATA_DIR_ENV, lambda: platformdirs.user_data_path(APP_NAME, appauthor=False))
+
+
+def cache_dir() -> Path:
+    """Root of what can be rebuilt or downloaded again."""
+    import platformdirs
+
+    return _from_env_or(CACHE_DIR_ENV, lambda: platformdirs.user_cache_path(APP_NAME, appauthor=False))
+
+
+def ensure(path: Path) -> Path:
+    """`path`, created (with parents) if missing."""
+    path.mkdir(parents=True, exist_ok=True)
+    return path
+
+
+def locks_dir() -> Path:
+    """One lock file per hub name: two commands (or the daemon) never talk to one hub at once."""
+    return ensure(data_dir() / "locks")
+
+
+def firmware_cache_dir() -> Path:
+    """Downloaded firmware releases, by version."""
+    return ensure(cache_dir() / "firmware")
+
+
+def docs_cache_dir() -> Path:
+    """The offline docs rendered to HTML."""
+    return ensure(cache_dir() / "docs")
