@@ -1,7 +1,8 @@
 """What the hub runtime may import, checked from the source (no interpreter needed).
 
-`openbricks/` is frozen into a MicroPython image for the ESP32: it can import
-only what that image has, and nothing of the host. The MicroPython run
+`openbricks/` and the frozen boot.py / main.py (firmware/frozen/) go into a
+MicroPython image for the ESP32: they can import only what that image has,
+and nothing of the host. The MicroPython run
 (tests/micropython) proves each module imports on the WebAssembly port, but
 that port carries extras the hub lacks (functools, logging, inspect, ...), so
 the allowlist below is the hub's own list: MicroPython's ESP32 port with the
@@ -15,6 +16,7 @@ import pytest
 
 REPO = Path(__file__).resolve().parents[1]
 RUNTIME_DIR = REPO / "openbricks"
+FROZEN_DIR = REPO / "firmware" / "frozen"
 
 # Built into MicroPython's ESP32 port (MicroPython library docs, "ESP32 quick reference").
 HUB_MODULES = {
@@ -46,6 +48,11 @@ HOST_LAYERS = ("openbricks_server", "openbricks_sim")
 
 def _runtime_files():
     return sorted(p for p in RUNTIME_DIR.rglob("*.py") if "__pycache__" not in p.parts)
+
+
+def _image_files():
+    """Everything frozen into the image: the runtime, and the boot.py / main.py that start it."""
+    return _runtime_files() + sorted(FROZEN_DIR.glob("*.py"))
 
 
 def _imports(path):
@@ -98,7 +105,7 @@ def _not_on_the_hub(name):
 
 def test_the_runtime_imports_only_what_the_hub_has():
     problems = []
-    for path in _runtime_files():
+    for path in _image_files():
         for line, name in _imports(path):
             why = _not_on_the_hub(name)
             if why is not None:
@@ -108,7 +115,7 @@ def test_the_runtime_imports_only_what_the_hub_has():
 
 def test_the_runtime_never_imports_the_host_layers():
     problems = []
-    for path in _runtime_files():
+    for path in _image_files():
         for line, name in _imports(path):
             if name.split(".")[0] in HOST_LAYERS:
                 problems.append(
