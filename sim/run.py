@@ -30,6 +30,7 @@ from dataclasses import asdict, dataclass, field
 from .clock import SimStopped, SimTimeLimit
 from .shim import Shim
 from .simulation import Simulation
+from .worlds import final_state
 
 FINISHED = "finished"  # the program returned (or called sys.exit())
 ERROR = "error"  # it raised
@@ -50,6 +51,7 @@ class RunResult:
     real_time_factor: float | None = None
     peak_rss_mb: float | None = None
     job: dict = field(default_factory=dict)  # the inputs: program, world, chassis, seed, start, limits
+    score: dict | None = None  # the world's scoring hook on the final state; None: no mission
 
     def to_json(self) -> str:
         return json.dumps(asdict(self))
@@ -130,6 +132,8 @@ class ProgramRun:
             )
         pose = sim.physics.pose()
         sim_ms = sim.clock.now_ms()
+        scoring = sim.physics.world.score
+        score = scoring(final_state(sim.physics.model, sim.physics.data)) if scoring else None
         return RunResult(
             exit=exit_reason,
             sim_ms=sim_ms,
@@ -140,6 +144,7 @@ class ProgramRun:
             real_time_factor=round(sim_ms / 1000 / wall_s, 2) if wall_s > 0 else None,
             peak_rss_mb=_peak_rss_mb(),
             job=job or {},
+            score=score,
         )
 
     def _wall_limit_reached(self):
@@ -239,6 +244,8 @@ def main(argv=None) -> int:
             f"({result.real_time_factor}x); pose x={result.pose['x_mm']:.1f} mm "
             f"y={result.pose['y_mm']:.1f} mm heading={result.pose['heading_deg']:.2f} deg\n"
         )
+        if result.score is not None:
+            stdout.write(f"score: {json.dumps(result.score)}\n")
     return 0 if result.exit in (FINISHED, TIME_LIMIT) else 1
 
 
