@@ -11,8 +11,9 @@ turning a little left and right in place while calibrate() runs, so the
 calibration always matches the mat under it. Start with the bar over the
 line, the robot facing along it.
 
-Wheel speeds go to each ST-3032's own speed loop (wheel mode) every 5 ms:
-a cruise speed plus and minus a proportional-derivative correction.
+Every 5 ms the drive base's move_wheels() sets both wheel speeds at once (one
+sync packet on the serial bus): a cruise speed plus and minus a
+proportional-derivative correction of the edge error.
 
 Run with:
     openbricks run -n <hub> examples/qtr_line_follow.py
@@ -23,6 +24,7 @@ import time
 
 from openbricks.drivers.qtr import QTRLineSensor
 from openbricks.drivers.st3032 import ST3032Motor
+from openbricks.robotics import DriveBase
 
 LEFT_ID, RIGHT_ID = 1, 2
 UART_ID, TX, RX = 1, 14, 41
@@ -37,14 +39,12 @@ SWEEP_MS = 450
 TIMEOUT_MS = 60_000
 
 
-def sweep_calibrate(qtr, left, right):
+def sweep_calibrate(qtr, db):
     """Turn left, right past centre, and back, calibrating all the way: every element sees line and mat."""
     for direction, duration in ((-1, SWEEP_MS), (1, 2 * SWEEP_MS), (-1, SWEEP_MS)):
-        left.run_speed(direction * SWEEP_DPS)
-        right.run_speed(-direction * SWEEP_DPS)
+        db.move_wheels(direction * SWEEP_DPS, -direction * SWEEP_DPS)
         qtr.calibrate(duration_ms=duration, poll_ms=POLL_MS)
-    left.brake()
-    right.brake()
+    db.stop(then="brake")
     if not qtr.calibrated():
         raise RuntimeError(
             "the calibration sweep did not cross the line with every element (spans: %r); start with "
@@ -52,7 +52,7 @@ def sweep_calibrate(qtr, left, right):
         )
 
 
-def follow(qtr, left, right):
+def follow(qtr, db):
     qtr.set_mode("left")
     previous = 0
     dark_run = 0
@@ -68,8 +68,7 @@ def follow(qtr, left, right):
         error = reading.edge_error()
         turn = KP * error + KD * (error - previous)
         previous = error
-        left.run_speed(CRUISE_DPS + turn)
-        right.run_speed(CRUISE_DPS - turn)
+        db.move_wheels(CRUISE_DPS + turn, CRUISE_DPS - turn)
         time.sleep_ms(POLL_MS)
     raise RuntimeError("no finish bar within %d ms: is the robot still on the line?" % TIMEOUT_MS)
 
@@ -78,14 +77,14 @@ def main():
     qtr = QTRLineSensor()
     left = ST3032Motor(servo_id=LEFT_ID, uart_id=UART_ID, tx=TX, rx=RX)
     right = ST3032Motor(servo_id=RIGHT_ID, uart_id=UART_ID, tx=TX, rx=RX, invert=True)
+    db = DriveBase(left, right, wheel_diameter_mm=88, axle_track_mm=138)
     print("calibrating: sweeping the bar over the line ...")
-    sweep_calibrate(qtr, left, right)
+    sweep_calibrate(qtr, db)
     print("following the left edge ...")
     try:
-        elapsed = follow(qtr, left, right)
+        elapsed = follow(qtr, db)
     finally:
-        left.brake()
-        right.brake()
+        db.stop(then="brake")
     print("finish bar reached after %.1f s" % (elapsed / 1000))
 
 

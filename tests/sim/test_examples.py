@@ -1,11 +1,6 @@
 """The bundled examples, each run to its end in the simulator in a process of its own, exactly as
-`openbricks sim run` runs them, and judged by what the robot did.
+`openbricks sim run` runs them, and judged by what the robot did."""
 
-Examples built on openbricks.robotics.DriveBase wait for it to land in the hub runtime: until then
-they are reported as skipped with that reason, and they run as soon as it exists.
-"""
-
-import importlib.util
 import json
 import math
 import os
@@ -19,10 +14,6 @@ import pytest
 from openbricks_sim.worlds import zones
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
-HAS_DRIVEBASE = importlib.util.find_spec("openbricks.robotics") is not None
-needs_drivebase = pytest.mark.skipif(
-    not HAS_DRIVEBASE, reason="openbricks.robotics (DriveBase) is not in the hub runtime yet"
-)
 pytestmark = pytest.mark.e2e
 
 
@@ -87,7 +78,6 @@ def test_qtr_calibrate_sweeps_every_element_and_saves_the_wiring(tmp_path):
     assert record["pins"] == list(range(1, 11))
 
 
-@needs_drivebase
 def test_square_closes_on_its_start(tmp_path):
     result = run_example(EXAMPLES / "drivebase_square.py", tmp_path)
     pose = result["pose"]
@@ -95,7 +85,6 @@ def test_square_closes_on_its_start(tmp_path):
     assert heading_error_deg(pose["heading_deg"], 0.0) < 2.0
 
 
-@needs_drivebase
 def test_rounded_square_comes_back_round(tmp_path):
     result = run_example(EXAMPLES / "drivebase_curve.py", tmp_path)
     pose = result["pose"]
@@ -104,7 +93,6 @@ def test_rounded_square_comes_back_round(tmp_path):
     assert heading_error_deg(pose["heading_deg"], 0.0) < 3.0
 
 
-@needs_drivebase
 def test_gyro_square_drifts_under_a_degree(tmp_path):
     result = run_example(EXAMPLES / "icm45686_square.py", tmp_path)
     drifts = [float(d) for d in re.findall(r"drift: ([+-][0-9.]+) deg", result["output"])]
@@ -127,7 +115,6 @@ def facing_along_the_align_line(ahead_mm):
     return (mid_x - ahead_mm * ux, mid_y - ahead_mm * uy, -math.degrees(math.atan2(uy, ux)))
 
 
-@needs_drivebase
 def test_qtr_align_squares_up_on_the_skewed_line(tmp_path):
     cal = tmp_path / "qtr.cal"
     # Calibrate as the example asks (the bar, 70 mm ahead of the axle, over a line the robot faces
@@ -138,14 +125,12 @@ def test_qtr_align_squares_up_on_the_skewed_line(tmp_path):
     assert heading_error_deg(result["pose"]["heading_deg"], align_line_normal_heading_deg()) < 1.5
 
 
-@needs_drivebase
 def test_colour_align_squares_up_on_the_skewed_line(tmp_path):
     result = run_example(EXAMPLES / "color_align.py", tmp_path, world="zones")
     assert heading_error_deg(result["pose"]["heading_deg"], align_line_normal_heading_deg()) < 2.0
     assert "aligned" in result["output"]
 
 
-@needs_drivebase
 def test_full_robot_stops_on_red_and_turns_back(tmp_path):
     result = run_example(EXAMPLES / "full_robot.py", tmp_path, world="zones")
     assert "red after" in result["output"]
@@ -154,14 +139,12 @@ def test_full_robot_stops_on_red_and_turns_back(tmp_path):
     assert heading_error_deg(result["pose"]["heading_deg"], 180.0) < 3.0
 
 
-@needs_drivebase
 def test_wheel_diameter_helper_drives_its_metre(tmp_path):
     result = run_example(EXAMPLES / "calibrate_wheel_diameter.py", tmp_path)
     assert abs(result["pose"]["x_mm"] - 1000.0) < 5.0
     assert "new wheel_diameter_mm" in result["output"]
 
 
-@needs_drivebase
 def test_axle_track_helper_measures_the_simulated_track(tmp_path):
     result = run_example(EXAMPLES / "icm45686_axle_track.py", tmp_path)
     track = float(re.search(r"axle_track_mm = ([0-9.]+)", result["output"]).group(1))
