@@ -23,7 +23,7 @@ import random
 import mujoco
 import numpy as np
 
-from .mat import GroundProbe, footprint_offsets_mm, spots_in_world
+from .mat import GroundProbe, footprint_offsets_mm, spot_pattern_m
 from .registers import EIO, RegisterDevice
 
 ADDRESS = 0x29
@@ -54,7 +54,7 @@ class TCS34725Model(RegisterDevice):
         if self.site_id < 0:
             raise ValueError(f"TCS34725 model: the robot has no site {site!r} to mount the sensor on")
         self.now_us = now_us
-        self.footprint = footprint_offsets_mm(footprint_radius_mm)
+        self._spots = spot_pattern_m([(0.0, 0.0)], footprint_offsets_mm(footprint_radius_mm))
         self.mount_height_mm = mount_height_mm
         self.white_counts_per_cycle = white_counts_per_cycle
         self.room_counts_per_cycle = room_counts_per_cycle
@@ -133,11 +133,7 @@ class TCS34725Model(RegisterDevice):
 
     def light_per_cycle(self) -> np.ndarray:
         """(red, green, blue) counts one 2.4 ms cycle at gain 1 collects from the surface right now."""
-        data = self.probe.data
-        xmat = data.site_xmat[self.site_id]
-        down = -xmat.reshape(3, 3)[:, 2]
-        spots = spots_in_world(xmat, [(0.0, 0.0)], self.footprint)
-        reflectance, range_mm = self.probe.look(data.site_xpos[self.site_id], down, spots)
+        reflectance, range_mm = self.probe.look(self.site_id, self._spots)
         falloff = 0.0 if math.isinf(range_mm) else min(_MAX_FALLOFF, (self.mount_height_mm / range_mm) ** 2)
         return reflectance[0] * self.white_counts_per_cycle * falloff + self.room_counts_per_cycle
 

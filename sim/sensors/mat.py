@@ -55,44 +55,40 @@ class _TexturedPlane:
             int(model.tex_nchannel[tex_id]),
         )
         start = int(model.tex_adr[tex_id])
-        self.texels = model.tex_data[start : start + h * w * n].reshape(h, w, n)[:, :, :3]
+        self._flat = model.tex_data[start : start + h * w * n].reshape(h * w, n)[:, :3]
         self.width, self.height = w, h
-        self.half_m = np.array(model.geom_size[geom_id][:2], dtype=np.float64)
-        self.repeat = np.array(model.mat_texrepeat[material_id], dtype=np.float64)
-        self.uniform = bool(model.mat_texuniform[material_id])
-        self._flat = self.texels.reshape(h * w, 3) if n == 3 else self.texels.reshape(h * w, -1)[:, :3]
-        # uv (0..1, v up) -> continuous texel index (column, row from the top), and the clamp limits.
-        self._scale = np.array([w, -h], dtype=np.float64)
-        self._shift = np.array([-0.5, h - 0.5])
+        half = np.array(model.geom_size[geom_id][:2], dtype=np.float64)
+        repeat = np.array(model.mat_texrepeat[material_id], dtype=np.float64)
+        uniform = bool(model.mat_texuniform[material_id])
+        # Geom-local xy (m) -> continuous texel coordinates (column, row from the top edge), as one
+        # multiply-add: uv = xy * repeat (per metre) or (xy / size + 1/2) * repeat (over the plane),
+        # then column = u * W - 1/2, row = (1 - v) * H - 1/2 (texel centres at half-integers).
+        size = np.array([w, -h], dtype=np.float64)
+        per_metre = repeat if uniform else repeat / (2.0 * half)
+        self._gain = per_metre * size
+        self._offset = (np.zeros(2) if uniform else 0.5 * repeat) * size + np.array([-0.5, h - 0.5])
+        self._wraps = uniform or bool(np.any(repeat != 1.0))
+        self._period = np.array([w, h], dtype=np.float64)
         self._last = np.array([w - 1, h - 1])
 
     def reflectance(self, local_xy_m: np.ndarray) -> np.ndarray:
         """Linear RGB at geom-local points (..., 2) metres, bilinearly interpolated."""
-        if self.uniform:
-            uv = local_xy_m * self.repeat
-        else:
-            uv = (local_xy_m / (2.0 * self.half_m) + 0.5) * self.repeat
-        uv -= np.floor(uv)  # repeats wrap
-        # Texel centres sit at (i + 0.5) / size; row 0 is the +y edge.
-        f = uv * self._scale + self._shift
-        f0 = np.floor(f)
-        t = f - f0
-        i0 = f0.astype(np.intp)
-        np.clip(i0, 0, self._last, out=i0)
+        f = local_xy_m * self._gain + self._offset
+        if self._wraps:
+            f %= self._period
+        i0 = np.floor(f)
+        t = f - i0
+        i0 = np.clip(i0.astype(np.intp), 0, self._last)
         i1 = np.minimum(i0 + 1, self._last)
-        w = self.width
-        corners = np.stack(
-            (
-                i0[..., 1] * w + i0[..., 0],
-                i0[..., 1] * w + i1[..., 0],
-                i1[..., 1] * w + i0[..., 0],
-                i1[..., 1] * w + i1[..., 0],
-            )
-        )
-        linear = _SRGB_TO_LINEAR[self._flat[corners]]  # (4, ..., 3)
-        tx, ty = t[..., 0], t[..., 1]
-        weights = np.stack(((1 - tx) * (1 - ty), tx * (1 - ty), (1 - tx) * ty, tx * ty))
-        return (linear * weights[..., None]).sum(axis=0)
+        row0 = i0[..., 1] * self.width
+        row1 = i1[..., 1] * self.width
+        corners = _SRGB_TO_LINEAR[
+            self._flat[np.stack((row0 + i0[..., 0], row0 + i1[..., 0], row1 + i0[..., 0], row1 + i1[..., 0]))]
+        ]
+        tx, ty = t[..., :1], t[..., 1:]
+        top = corners[0] + (corners[1] - corners[0]) * tx
+        bottom = corners[2] + (corners[3] - corners[2]) * tx
+        return top + (bottom - top) * ty
 
 
 class GroundProbe:
@@ -135,32 +131,36 @@ class GroundProbe:
             return -1, math.inf
         return int(self._geom_id[0]), distance
 
-    def look(self, origin_m: np.ndarray, down: np.ndarray, spots_m: np.ndarray):
-        """Reflectance under each spot, and the range to the surface.
+    def look(self, site_id: int, spots_m: np.ndarray):
+        """Reflectance under each spot of a downward-looking sensor, and the range to the surface.
 
-        One ray from `origin_m` along the unit vector `down` finds the surface; `spots_m` (G, K, 3)
-        holds, per spot, K sample offsets (world frame, metres) around the hit point: a sensor's
-        footprint, or for a reflectance bar each element's footprint shifted to its position. The
-        whole pattern is looked up in one vectorised pass. Returns ((G, 3) linear reflectance,
-        range in mm, or inf when no surface is within range, which reads black).
+        One ray from the site along its -z axis finds the surface. `spots_m` (G, K, 2) holds, per
+        spot, K sample points in the sensor's own frame (x forward, y left, metres): a sensor's
+        footprint, or for a reflectance bar each element's footprint at its position. They are
+        carried onto the surface around the hit point and looked up in one vectorised pass.
+        Returns ((G, 3) linear reflectance, range in mm, or inf when no surface is within range,
+        which reads black).
         """
+        data = self.data
         groups = spots_m.shape[0]
-        geom, distance = self.cast_down(origin_m, down)
+        axes = data.site_xmat[site_id].reshape(3, 3)
+        down = -axes[:, 2]
+        geom, distance = self.cast_down(data.site_xpos[site_id], down)
         if geom < 0:
             return np.zeros((groups, 3)), math.inf
         plane = self._plane(geom)
         if plane is None:
             return np.tile(self._plain_colour(geom), (groups, 1)), distance * 1000.0
-        hit = origin_m + down * distance
-        xmat = self.data.geom_xmat[geom].reshape(3, 3)
-        local = (hit + spots_m - self.data.geom_xpos[geom]) @ xmat  # world -> geom frame
-        return plane.reflectance(local[..., :2]).mean(axis=1), distance * 1000.0
+        rotation = data.geom_xmat[geom].reshape(3, 3)
+        hit = data.site_xpos[site_id] + down * distance
+        centre = ((hit - data.geom_xpos[geom]) @ rotation)[:2]
+        onto_plane = (axes[:, :2].T @ rotation)[:, :2]  # sensor xy -> geom-local xy
+        local = spots_m @ onto_plane + centre
+        return plane.reflectance(local).mean(axis=1), distance * 1000.0
 
 
-def spots_in_world(site_xmat: np.ndarray, centres_mm, footprint_mm: np.ndarray) -> np.ndarray:
-    """(G, K, 3) world-frame offsets of every footprint sample, for spot centres given in the
-    sensor's own frame (x forward, y left, mm) and a (K, 2) footprint pattern."""
+def spot_pattern_m(centres_mm, footprint_mm: np.ndarray) -> np.ndarray:
+    """(G, K, 2) sample points in a sensor's frame (metres): a footprint around each spot centre
+    given in mm (x forward, y left)."""
     centres = np.asarray(centres_mm, dtype=np.float64).reshape(-1, 1, 2)
-    local = (centres + footprint_mm[None, :, :]) / 1000.0
-    axes = site_xmat.reshape(3, 3)[:, :2]  # columns: the sensor's x and y axes in the world
-    return local @ axes.T
+    return (centres + footprint_mm[None, :, :]) / 1000.0

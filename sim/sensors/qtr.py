@@ -22,7 +22,7 @@ import math
 import mujoco
 import numpy as np
 
-from .mat import GroundProbe, footprint_offsets_mm, spots_in_world
+from .mat import GroundProbe, footprint_offsets_mm, spot_pattern_m
 
 PINS = (1, 2, 3, 4, 5, 6, 7, 8, 9, 10)
 POSITIONS_MM = (-28.0, -20.0, -16.0, -12.0, -4.0, 4.0, 12.0, 16.0, 20.0, 28.0)
@@ -53,8 +53,8 @@ class QTRBarModel:
             raise ValueError(f"QTR model: the robot has no site {site!r} to mount the bar on")
         self.pins = tuple(pins)
         # Element centres in the sensor frame (x forward, y left): the driver's +x is the robot's right.
-        self._centres = [(0.0, -x) for x in positions_mm]
-        self.footprint = footprint_offsets_mm(footprint_radius_mm)
+        centres = [(0.0, -x) for x in positions_mm]
+        self._spots = spot_pattern_m(centres, footprint_offsets_mm(footprint_radius_mm))
         self.mount_height_mm = mount_height_mm
         self.dark_raw = dark_raw
         self.raw_per_reflectance = raw_per_reflectance
@@ -65,11 +65,7 @@ class QTRBarModel:
 
     def reflectance(self) -> np.ndarray:
         """IR reflectance 0..1 under each element, left to right, right now."""
-        data = self.probe.data
-        xmat = data.site_xmat[self.site_id]
-        down = -xmat.reshape(3, 3)[:, 2]
-        spots = spots_in_world(xmat, self._centres, self.footprint)
-        colour, range_mm = self.probe.look(data.site_xpos[self.site_id], down, spots)
+        colour, range_mm = self.probe.look(self.site_id, self._spots)
         if math.isinf(range_mm):
             return np.zeros(len(self.pins))
         falloff = min(1.5, (self.mount_height_mm / range_mm) ** 2)
