@@ -1,0 +1,90 @@
+/*
+ * _openbricks_native for MicroPython: the control cores of firmware/native/
+ * bound one file per core (mp_<core>.c), mirroring the host binding
+ * (firmware/native/bindings/cpython/py_<core>.c): the same names, arguments,
+ * defaults, results and error messages, so runtime code and tests read the
+ * same on the hub and in the simulator.
+ *
+ * What only the hub has: motor_process ticks itself from a 1 ms timer on
+ * ESP-IDF builds (mp_scheduler.c), and interrupt_main() raises
+ * KeyboardInterrupt in the main thread for the launcher's stop button.
+ * What only the host has: MotorIO and the C-API capsule, which let the
+ * simulator's wheels plug into the cores in C.
+ */
+#ifndef OB_MP_BINDINGS_H
+#define OB_MP_BINDINGS_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "py/obj.h"
+#include "py/runtime.h"
+
+/* MicroPython 1.25 renamed NORETURN to MP_NORETURN; accept either. */
+#ifndef MP_NORETURN
+#define MP_NORETURN NORETURN
+#endif
+
+#include "ob_types.h"
+#include "scheduler.h"
+
+/* ---- Argument checks (mp_args.c): every binding rejects bad input the same way, with a
+ * TypeError or ValueError naming the callable and the argument. ---- */
+
+/* A real, finite number that fits a float (int or float; bool and str are refused). */
+float ob_mp_float(mp_obj_t obj, const char *where, const char *name);
+
+/* As ob_mp_float, and > 0. */
+float ob_mp_positive_float(mp_obj_t obj, const char *where, const char *name);
+
+/* A scheduler time: a non-negative int, taken modulo 2^32 like the hub's tick clock. */
+uint32_t ob_mp_time_ms(mp_obj_t obj, const char *where);
+
+/* The manual's then= strings: "coast", "stop", "brake", "hold", "continue". */
+ob_then_t ob_mp_then(mp_obj_t obj, const char *where);
+
+/* Canonical name of a then value, for reporting state. */
+const char *ob_mp_then_name(ob_then_t then);
+
+/* None when absent: MP_OBJ_NULL (an omitted optional argument) and None read the same. */
+static inline bool ob_mp_given(mp_obj_t obj) {
+    return obj != MP_OBJ_NULL && obj != mp_const_none;
+}
+
+/* ---- Native subscribers (mp_scheduler.c). ----
+ *
+ * motor_process ticks Servo and DriveBase through a C function pointer, with
+ * no Python call. Their object structs start with this header; their types
+ * name ob_mp_subscriber_type as parent. A tick_fn never raises: an exception
+ * from an IO callable is left in `error`, and motor_process raises the first
+ * one after every subscriber of the tick ran (one failing motor must not stop
+ * the others being controlled). */
+typedef struct {
+    mp_obj_base_t base;
+    ob_tick_fn_t tick_fn; /* NULL: built without IO, drive it with update() */
+    void *tick_ctx;
+    mp_obj_t error;       /* first exception of the current call, or MP_OBJ_NULL */
+} ob_mp_subscriber_t;
+
+extern const mp_obj_type_t ob_mp_subscriber_type;
+
+/* Keep the first exception of a call; print (not lose) any later one. */
+void ob_mp_subscriber_stash(ob_mp_subscriber_t *sub, mp_obj_t exc);
+
+/* Raise the stashed exception, if any, clearing it. */
+void ob_mp_subscriber_raise(ob_mp_subscriber_t *sub);
+
+/* ---- Types and objects of the module. ---- */
+
+extern const mp_obj_type_t ob_mp_profile_type;
+extern const mp_obj_type_t ob_mp_observer_type;
+extern const mp_obj_type_t ob_mp_motor_process_type;
+extern const mp_obj_type_t ob_mp_servo_type;
+extern const mp_obj_type_t ob_mp_drivebase_type;
+extern const mp_obj_type_t ob_mp_imu_yaw_type;
+extern const mp_obj_module_t ob_mp_scs_module;
+
+/* The module's motor_process (created on first use; see mp_scheduler.c). */
+mp_obj_t ob_mp_motor_process_get(void);
+
+#endif /* OB_MP_BINDINGS_H */
