@@ -1,0 +1,1 @@
+"""`openbricks flash`: image inspection, signature check, release download, esptool, naming the hub."""
