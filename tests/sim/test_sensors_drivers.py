@@ -21,6 +21,11 @@ def hub(request):
     sim.close()
 
 
+def free_joint_qpos(physics):
+    """Where the robot's free joint (x, y, z, then the orientation quaternion) starts in qpos."""
+    return physics.model.joint("robot_free").qposadr[0]
+
+
 def at(world, x_mm, y_mm, heading_deg=0.0):
     return pytest.mark.parametrize("hub", [(world, (x_mm, y_mm, heading_deg))], indirect=True)
 
@@ -61,11 +66,12 @@ def test_qtr_line_sensor_calibrates_on_a_sweep_and_sees_the_line_centred(hub):
     qtr = QTRLineSensor()
     robot = hub.physics
     # Sweep by hand, as a person would: slide the robot across the line while calibrate() runs.
-    y0 = robot.data.qpos[robot._free_qpos + 1]
+    y = free_joint_qpos(robot) + 1
+    y0 = robot.data.qpos[y]
     for step in range(-40, 41, 4):
-        robot.data.qpos[robot._free_qpos + 1] = y0 + step / 1000.0
+        robot.data.qpos[y] = y0 + step / 1000.0
         qtr.calibrate(duration_ms=10)
-    robot.data.qpos[robot._free_qpos + 1] = y0
+    robot.data.qpos[y] = y0
     time.sleep_ms(5)
     reading = qtr.read()
     assert qtr.calibrated()
@@ -140,8 +146,25 @@ def test_bno055_driver_heading_follows_a_spin_clockwise_positive(hub):
     robot = hub.physics
     assert abs(imu.heading()) < 0.5
     # Turn the robot 30 degrees clockwise by hand (MuJoCo yaw is counter-clockwise).
-    q = robot._free_qpos
+    q = free_joint_qpos(robot)
     half = math.radians(-30.0) / 2
     robot.data.qpos[q + 3 : q + 7] = [math.cos(half), 0.0, 0.0, math.sin(half)]
     time.sleep_ms(20)
     assert imu.heading() == pytest.approx(30.0, abs=0.5)
+
+
+def test_the_rig_is_wired_as_documented_and_no_0x29_part_sits_on_the_bare_bus():
+    from openbricks_sim.sensors import rig
+
+    sim = Simulation("empty", "st3032", seed=0, epoch_ms=0)
+    try:
+        sensors = sim.sensors
+        assert set(sim.board.i2c_bus(rig.I2C_BUS)) == {rig.MUX_ADDRESS, rig.BNO055_ADDRESS}
+        assert [ch for ch in range(8) if sensors.mux.channels[ch]] == [0, 1, rig.RANGE_FINDER_CHANNEL]
+        assert sim.board.spi_devices[rig.ICM45686_CS] is sensors.icm45686
+        assert all(pin in sim.board.analog for pin in range(1, 11))
+        assert rig.HCSR04_ECHO in sim.board.pulses
+        with pytest.raises(ValueError, match="bare_0x29 must be one of"):
+            rig.attach_sensors(sim.physics, sim.board, bare_0x29="tcs3472")
+    finally:
+        sim.close()
