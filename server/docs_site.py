@@ -65,8 +65,9 @@ def _render_if_stale(source: Path, target: Path) -> None:
     body = _MD_LINK.sub(lambda m: f'href="{m.group(1)}.html{m.group(2) or ""}"', body)
     title = next((line[2:].strip() for line in text.splitlines() if line.startswith("# ")), source.stem)
     page = (
-        f'<!doctype html>\n<html lang="en"><head><meta charset="utf-8"><title>{html.escape(title)} - openbricks'
-        f'</title><style>{_STYLE}</style></head>\n<body><nav><a href="index.html">openbricks docs</a></nav>\n'
+        '<!doctype html>\n<html lang="en"><head><meta charset="utf-8">'
+        f"<title>{html.escape(title)} - openbricks</title><style>{_STYLE}</style></head>\n"
+        '<body><nav><a href="index.html">openbricks docs</a></nav>\n'
         f"{body}</body></html>\n"
     )
     tmp = target.with_name(target.name + ".tmp")
