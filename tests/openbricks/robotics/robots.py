@@ -53,7 +53,7 @@ def gyro_chip():
 def icm45686():
     from openbricks.drivers.icm45686 import ICM45686
 
-    imu = ICM45686(**IMU_PINS)
+    imu = ICM45686(sample_hz=1000, **IMU_PINS)
     imu._yaw.seed_bias(0.0)  # as after save_calibration(): no half-second stillness wait
     return imu
 
@@ -90,6 +90,16 @@ class EncoderRobot:
         return DriveBase(
             self.left, self.right, wheel_diameter_mm=WHEEL_MM, axle_track_mm=TRACK_MM, imu=self.imu
         )
+
+    def close(self):
+        """Take this robot off the board (its plants, chassis and IMU stop running on the clock)."""
+        for rig in self.rigs:
+            rig.close()
+        self.chassis.close()
+        if self.imu is not None:
+            self.imu.close()
+        for motor in (self.left, self.right):
+            motor.close()
 
     def wheel_speeds_dps(self):
         """Forward-positive wheel speeds as the plants turn them."""
