@@ -1,0 +1,372 @@
+"""An emulated hub for the link tests and the upload benchmark: MicroPython's REPL byte for byte.
+
+It speaks the REPL the way the hub's `pyexec.c` does (friendly REPL, raw REPL, raw-paste with its
+flow-control window, Ctrl-C / Ctrl-D semantics, soft reboot) and executes commands with CPython in
+a worker thread, so output streams while a command runs and Ctrl-C interrupts it. Behind the REPL,
+`openbricks.host_calls` is an in-memory model of the hub's calls (info, set_rtc, staging with
+base64 + zlib + crc32 verification, run); a staged program is Python source that runs with an
+interruptible `sleep_ms`.
+
+It enforces what a real hub would punish: bytes beyond the raw-paste credit (plus the few bytes of
+slack the hub's stdin ring has) are dropped and counted in `overflow_bytes`, as the ring would.
+All methods run on the event loop's thread except the command thread, which posts back to it.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import base64
+import builtins
+import io
+import json
+import struct
+import threading
+import traceback
+import zlib
+from collections.abc import Callable
+
+RAW_BANNER = b"raw REPL; CTRL-B to exit\r\n"
+FRIENDLY_BANNER = (
+    b"MicroPython v1.27.0 on 2026-01-01; openbricks hub with ESP32S3\r\n"
+    b'Type "help()" for more information.\r\n>>> '
+)
+RESULT_MARKER = "@openbricks-result "
+TRACEBACK_HEAD = b'Traceback (most recent call last):\r\n  File "<stdin>", line 1, in <module>\r\n'
+# The hub's stdin ring is a little larger than MICROPY_REPL_STDIN_BUFFER_MAX (260 for 256): room for a
+# Ctrl-D and the next raw-paste request that a host sends right after a full window.
+RING_SLACK_BYTES = 4
+
+
+class ScriptedHub:
+    def __init__(
+        self,
+        name: str = "RobotA",
+        *,
+        stdin_buffer_max: int = 256,
+        raw_paste: bool = True,
+        compression: tuple[str, ...] = ("zlib",),
+    ):
+        self.name = name
+        self.window = stdin_buffer_max // 2
+        self.ring_bytes = stdin_buffer_max + RING_SLACK_BYTES
+        self.raw_paste = raw_paste
+        self.compression = compression
+        self.files: dict[str, bytes] = {}
+        self.overflow_bytes = 0
+        self.received = bytearray()
+        self.commands: list[str] = []
+        self.epoch_ms: int | None = None
+        self.runs = 0
+        self._send: Callable[[bytes], None] = lambda data: None
+        self._loop: asyncio.AbstractEventLoop | None = None
+        self._mode = "friendly"  # friendly | raw | paste | busy
+        self._line = bytearray()
+        self._paste = bytearray()
+        self._paste_consumed = 0
+        self._paste_credit = 0
+        self._pending = bytearray()  # input that arrived while a command ran
+        self._interrupt = threading.Event()
+        self._staging: dict | None = None
+
+    # -- wiring ---------------------------------------------------------------------------------
+
+    def attach(self, send: Callable[[bytes], None], loop: asyncio.AbstractEventLoop) -> None:
+        """Where the hub's output goes (called on `loop`'s thread) and which loop runs the hub."""
+        self._send = send
+        self._loop = loop
+
+    @property
+    def busy(self) -> bool:
+        return self._mode == "busy"
+
+    def feed(self, data: bytes) -> None:
+        """Bytes from the host, in order (on the loop's thread)."""
+        self.received += data
+        for value in data:
+            self._byte(value)
+
+    # -- the REPL state machine -----------------------------------------------------------------
+
+    def _byte(self, c: int) -> None:
+        if self._mode == "busy":
+            if c == 0x03:
+                self._interrupt.set()
+            elif len(self._pending) < self.ring_bytes:
+                self._pending.append(c)
+            else:
+                self.overflow_bytes += 1
+        elif self._mode == "paste":
+            self._paste_byte(c)
+        elif self._mode == "raw":
+            self._raw_byte(c)
+        else:
+            self._friendly_byte(c)
+
+    def _friendly_byte(self, c: int) -> None:
+        if c == 0x01:
+            self._mode = "raw"
+            self._line.clear()
+            self._send(b"\r\n" + RAW_BANNER + b">")
+        elif c == 0x03:
+            self._line.clear()
+            self._send(b"\r\n>>> ")
+        elif c == 0x04:
+            self._send(b"\r\nMPY: soft reboot\r\n" + FRIENDLY_BANNER)
+        elif c == 0x0D:
+            self._line.clear()
+            self._send(b"\r\n>>> ")
+        else:
+            self._line.append(c)
+            self._send(bytes((c,)))
+
+    def _raw_byte(self, c: int) -> None:
+        if c == 0x01:
+            if bytes(self._line) == b"\x05A" and self.raw_paste:
+                self._line.clear()
+                self._start_paste()
+                return
+            if bytes(self._line[:1]) == b"\x05":
+                self._line.clear()
+                self._send(b"R\x00>")
+                return
+            self._line.clear()
+            self._send(RAW_BANNER + b">")
+        elif c == 0x02:
+            self._mode = "friendly"
+            self._line.clear()
+            self._send(b"\r\n" + FRIENDLY_BANNER)
+        elif c == 0x03:
+            self._line.clear()
+        elif c == 0x04:
+            self._send(b"OK")
+            if not self._line:
+                self._soft_reboot()
+                return
+            source = bytes(self._line)
+            self._line.clear()
+            self._execute(source)
+        else:
+            self._line.append(c)
+
+    def _soft_reboot(self) -> None:
+        self._staging = None
+        self._send(b"\r\nMPY: soft reboot\r\n" + RAW_BANNER + b">")
+
+    def _start_paste(self) -> None:
+        self._mode = "paste"
+        self._paste.clear()
+        self._paste_consumed = 0
+        self._paste_credit = 2 * self.window
+        self._send(b"R\x01" + struct.pack("<H", self.window) + b"\x01")
+
+    def _paste_byte(self, c: int) -> None:
+        if self._paste_credit + RING_SLACK_BYTES <= 0:
+            # The host ignored flow control: a real ring would be full and this byte lost.
+            self.overflow_bytes += 1
+            return
+        self._paste_credit -= 1
+        if c in (0x03, 0x04):
+            self._mode = "busy"
+            self._send(b"\x04")
+            if c == 0x03:
+                self._finish(b"", b"Traceback (most recent call last):\r\nKeyboardInterrupt: \r\n")
+            else:
+                self._execute(bytes(self._paste))
+            return
+        self._paste.append(c)
+        self._paste_consumed += 1
+        if self._paste_consumed % self.window == 0:
+            self._paste_credit += self.window
+            self._send(b"\x01")
+
+    # -- executing ------------------------------------------------------------------------------
+
+    def _execute(self, source: bytes) -> None:
+        self._mode = "busy"
+        self._interrupt.clear()
+        text = source.decode("utf-8", "replace")
+        self.commands.append(text)
+        threading.Thread(
+            target=self._run_command, args=(text,), name=f"{self.name}-exec", daemon=True
+        ).start()
+
+    def _post(self, fn, *args) -> None:
+        assert self._loop is not None, "attach() the hub to a loop first"
+        self._loop.call_soon_threadsafe(fn, *args)
+
+    def _stdout(self, text: str) -> None:
+        self._post(self._send, text.replace("\n", "\r\n").encode())
+
+    def _run_command(self, text: str) -> None:
+        stderr = b""
+        namespace = {"__name__": "__main__", "__builtins__": self._builtins()}
+        try:
+            exec(compile(text, "<stdin>", "exec"), namespace)  # noqa: S102 - the emulated hub runs host code
+        except KeyboardInterrupt:
+            stderr = TRACEBACK_HEAD + b"KeyboardInterrupt: \r\n"
+        except BaseException as exc:  # noqa: BLE001 - every error is reported as the hub would
+            lines = traceback.format_exception_only(type(exc), exc)
+            stderr = TRACEBACK_HEAD + "".join(lines).replace("\n", "\r\n").encode()
+        self._post(self._finish, b"", stderr)
+
+    def _finish(self, stdout: bytes, stderr: bytes) -> None:
+        self._send(stdout + b"\x04" + stderr + b"\x04>")
+        self._mode = "raw"
+        pending = bytes(self._pending)
+        self._pending.clear()
+        if pending:
+            self.feed_pending(pending)
+
+    def feed_pending(self, data: bytes) -> None:
+        for value in data:
+            self._byte(value)
+
+    def sleep_ms(self, ms: int) -> None:
+        """The hub program's sleep: Ctrl-C ends it with KeyboardInterrupt, as on the hub."""
+        if self._interrupt.wait(ms / 1000):
+            self._interrupt.clear()
+            raise KeyboardInterrupt
+
+    def _builtins(self) -> dict:
+        hub = self
+        names = dict(vars(builtins))
+
+        def hub_print(*args, sep=" ", end="\n", file=None):
+            hub._stdout(sep.join(str(a) for a in args) + end)
+
+        def hub_import(name, globals=None, locals=None, fromlist=(), level=0):
+            if name == "openbricks.host_calls":
+                module = _HostCalls(hub)
+                if fromlist:
+                    return module
+                return _Package(host_calls=module)
+            return builtins.__import__(name, globals, locals, fromlist, level)
+
+        def hub_open(path, mode="r"):
+            if "r" not in mode or path not in hub.files:
+                raise OSError(2, "ENOENT")
+            data = hub.files[path]
+            return io.BytesIO(data) if "b" in mode else io.StringIO(data.decode())
+
+        names["open"] = hub_open
+        names["print"] = hub_print
+        names["__import__"] = hub_import
+        names["sleep_ms"] = self.sleep_ms
+        return names
+
+
+class _Package:
+    def __init__(self, **modules):
+        self.__dict__.update(modules)
+
+
+class _HostCalls:
+    """The hub's `openbricks.host_calls`, modelled: one result line per call."""
+
+    def __init__(self, hub: ScriptedHub):
+        self.hub = hub
+
+    def _reply(self, result: dict) -> dict:
+        self.hub._stdout(RESULT_MARKER + json.dumps(result) + "\n")
+        return result
+
+    def _call(self, fn, *args) -> dict:
+        try:
+            result = fn(*args)
+        except KeyboardInterrupt:
+            raise
+        except Exception as exc:  # noqa: BLE001 - the hub reports every failure as data
+            return self._reply({"ok": False, "type": type(exc).__name__, "error": str(exc)})
+        result["ok"] = True
+        return self._reply(result)
+
+    def info(self):
+        return self._call(
+            lambda: {
+                "protocol": 1,
+                "firmware": "openbricks 2.7.1 (emulated)",
+                "version": "2.7.1",
+                "chip": "esp32s3",
+                "runtime": "micropython 1.27.0",
+                "accepts_mpy": True,
+                "mpy_version": 6,
+                "program_path": "/program.mpy",
+                "max_program_bytes": 256 * 1024,
+                "compression": list(self.hub.compression),
+                "running": False,
+                "name": self.hub.name,
+            }
+        )
+
+    def set_rtc(self, epoch_ms):
+        def _set():
+            self.hub.epoch_ms = epoch_ms
+            return {"epoch_ms": epoch_ms}
+
+        return self._call(_set)
+
+    def _inflate(self, data: bytes, compression) -> bytes:
+        if compression is None:
+            return data
+        if compression != "zlib" or "zlib" not in self.hub.compression:
+            raise ValueError(f"compression={compression!r}: this hub cannot inflate it")
+        return zlib.decompress(data)
+
+    def _commit(self, path, data, size, crc32):
+        if size is not None and len(data) != size:
+            raise ValueError(f"upload truncated: got {len(data)} bytes, expected {size}; stage it again")
+        crc = zlib.crc32(data)
+        if crc32 is not None and crc != crc32:
+            raise ValueError(f"upload corrupted: crc32 {crc:08x}, expected {crc32:08x}; stage it again")
+        self.hub.files[path] = data
+        return {"path": path, "bytes": len(data), "crc32": crc}
+
+    def stage(self, payload, path="/program.mpy", encoding="base64", compression=None, size=None, crc32=None):
+        return self._call(
+            lambda: self._commit(path, self._inflate(base64.b64decode(payload), compression), size, crc32)
+        )
+
+    def stage_begin(self, path="/program.mpy"):
+        def _begin():
+            self.hub._staging = {"path": path, "data": bytearray()}
+            return {"path": path}
+
+        return self._call(_begin)
+
+    def stage_append(self, payload, encoding="base64"):
+        def _append():
+            if self.hub._staging is None:
+                raise RuntimeError("no upload in progress: call stage_begin(path) first")
+            self.hub._staging["data"] += base64.b64decode(payload)
+            return {"received": len(self.hub._staging["data"])}
+
+        return self._call(_append)
+
+    def stage_end(self, compression=None, size=None, crc32=None):
+        def _end():
+            staging = self.hub._staging
+            if staging is None:
+                raise RuntimeError("no upload in progress: call stage_begin(path) first")
+            self.hub._staging = None
+            return self._commit(
+                staging["path"], self._inflate(bytes(staging["data"]), compression), size, crc32
+            )
+
+        return self._call(_end)
+
+    def run(self, path="/program.mpy"):
+        hub = self.hub
+        hub.runs += 1
+        source = hub.files.get(path)
+        if source is None:
+            return self._reply({"ok": False, "type": "OSError", "error": f"no program staged at {path}"})
+        namespace = {"__name__": "__main__", "__builtins__": hub._builtins()}
+        try:
+            exec(compile(source.decode(), path, "exec"), namespace)  # noqa: S102
+        except KeyboardInterrupt:
+            self._reply({"ok": True, "outcome": "stopped", "run": hub.runs})
+            raise
+        except Exception as exc:  # noqa: BLE001
+            hub._stdout(f"Traceback (most recent call last):\n{type(exc).__name__}: {exc}\n")
+            return self._reply({"ok": True, "outcome": "error", "run": hub.runs})
+        return self._reply({"ok": True, "outcome": "finished", "run": hub.runs})
