@@ -26,8 +26,9 @@ ZONES = {
     "black": (-150.0, -450.0, 150.0, -250.0, BLACK),
 }
 # The align line crosses the robot's path about 250 mm ahead of the colour sensors, skewed by
-# about 6 degrees so that squaring up on it is a visible correction.
-ALIGN_LINE_MM = ((-210.0, -300.0), (-150.0, 300.0))
+# about 6 degrees so that squaring up on it is a visible correction; it stops short of the
+# yellow and black zones so that every band on the mat is one colour.
+ALIGN_LINE_MM = ((-203.0, -230.0), (-157.0, 230.0))
 ALIGN_LINE_WIDTH_MM = 25.0
 
 

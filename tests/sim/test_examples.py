@@ -149,3 +149,12 @@ def test_axle_track_helper_measures_the_simulated_track(tmp_path):
     result = run_example(EXAMPLES / "icm45686_axle_track.py", tmp_path)
     track = float(re.search(r"axle_track_mm = ([0-9.]+)", result["output"]).group(1))
     assert track == pytest.approx(138.0, rel=0.02)
+
+
+def test_colour_array_names_the_bands_it_crosses_on_the_way_to_red(tmp_path):
+    result = run_example(EXAMPLES / "color_array.py", tmp_path, world="zones")
+    seen = {"left": [], "right": []}
+    for side, name in re.findall(r"^(left|right): (\w+)$", result["output"], flags=re.M):
+        seen[side].append(name)
+    assert seen["left"] == seen["right"] == ["white", "black", "white", "red"]
+    assert result["score"] == {"zone": "red"}
