@@ -22,6 +22,7 @@ import time
 
 from micropython import const
 
+from openbricks import estop
 from openbricks.drivers.st3215 import not_responding_message
 
 _POLL_MS = const(5)
@@ -98,6 +99,7 @@ class BusPort:
                 process.unsubscribe(servo)
         self._base = (controller, slots)
         process.subscribe(controller)
+        estop.on_engage(self.halt)  # again after each program boundary, which forgets the halts
 
     def _take_from_drivebase(self, slot):
         base = self._base
@@ -110,14 +112,22 @@ class BusPort:
         controller.stop("coast")  # releases both wheels now; the other one stays free
         _openbricks_native.motor_process.unsubscribe(controller)
 
-    def _servo(self, slot):
+    def halt(self):
+        """The e-stop's halt: every wheel and accessory this port drives is released at once."""
+        if self._base is not None:
+            self._base[0].stop("coast")
+        for servo in self._servos.values():
+            servo.coast()
+
+    def _servo(self, slot, what):
         """The native servo controller that runs direct commands on `slot`, now driving it."""
         import _openbricks_native
 
+        motor = self._motors[slot]
+        estop.check("%s.%s" % (motor.side or type(motor).__name__, what))
         self._take_from_drivebase(slot)
         servo = self._servos.get(slot)
         if servo is None:
-            motor = self._motors[slot]
             kwargs = io_kwargs(self.engine.motor_io(slot))
             kwargs["max_speed_dps"] = motor.max_dps
             if motor.accel_dps2 > 0:  # 0 is the servo's "no ramp"; the native default ramps steeply
@@ -127,6 +137,7 @@ class BusPort:
                 servo.set_duty_limit(self._limits[slot])
             self._servos[slot] = servo
         _openbricks_native.motor_process.subscribe(servo)
+        estop.on_engage(self.halt)
         return servo
 
     def _checked(self, slot):
@@ -165,22 +176,28 @@ class BusPort:
 
     def run_speed(self, slot, deg_per_s):
         self._checked(slot)
-        self._servo(slot).run_speed(deg_per_s)
+        self._servo(slot, "run_speed").run_speed(deg_per_s)
 
     def dc(self, slot, duty):
         self._checked(slot)
-        self._servo(slot).dc(max(-100, min(100, duty)))
+        self._servo(slot, "dc").dc(max(-100, min(100, duty)))
 
     def brake(self, slot):
         # Like the servo's own brake: ramp to zero speed and hold that rate.
-        self._servo(slot).run_speed(0)
+        self._servo(slot, "brake").run_speed(0)
 
     def coast(self, slot):
-        self._servo(slot).coast()
+        # Releasing a wheel is always allowed, e-stop or not, and needs no controller of its own.
+        self._take_from_drivebase(slot)
+        servo = self._servos.get(slot)
+        if servo is not None:
+            servo.coast()
+        else:
+            self.engine.motor_io(slot).coast()
 
     def hold(self, slot):
         self._checked(slot)
-        self._servo(slot).hold()
+        self._servo(slot, "hold").hold()
 
     def set_duty_limit(self, slot, limit_pct):
         self._limits[slot] = limit_pct
@@ -192,7 +209,7 @@ class BusPort:
         if deg_per_s == 0:
             raise ValueError("run_angle(deg_per_s=0): the move would never finish; give a non-zero speed")
         self._checked(slot)
-        servo = self._servo(slot)
+        servo = self._servo(slot, "run_angle")
         servo.run_angle(abs(deg_per_s), target_angle, then=then)
         if wait:
             while not self.done(slot):

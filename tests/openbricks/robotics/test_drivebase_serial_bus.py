@@ -12,6 +12,7 @@ import _openbricks_native
 from fakes import serial_bus_engine
 from fakes.expect import approx, raises
 from fakes.scs_servo import REG_TORQUE_ENABLE
+from openbricks import estop
 from tests.openbricks.robotics.robots import SERVO_WHEEL_MM, ServoRobot
 
 NEEDS_NATIVE = True
@@ -158,6 +159,19 @@ def test_adopted_motors_keep_their_motor_api_and_take_their_wheel_from_the_drive
     db.straight(50)
     assert approx(robot.chassis.travel_mm - travel, 50, 1.5)
     assert approx(robot.chassis.heading_deg, heading, 0.5)
+
+
+def test_estop_releases_an_adopted_wheel_under_a_direct_command_and_refuses_the_next_one():
+    robot = ServoRobot()
+    robot.drivebase()
+    robot.left.run_speed(300)
+    time.sleep_ms(300)
+    estop.engage("test")
+    time.sleep_ms(2)
+    assert robot.servos[0].reg16(REG_TORQUE_ENABLE) & 0xFF == 0
+    with raises(estop.EStopError, "left wheel.run_speed refused: e-stop engaged"):
+        robot.left.run_speed(100)
+    robot.left.coast()  # releasing is always allowed
 
 
 def test_other_motors_on_the_chain_are_adopted_too_and_keep_working():
