@@ -91,10 +91,6 @@ class Run {
     this.startedAt = performance.now();
   }
 
-  fileOf(module) {
-    return this.plan.testModules.find((t) => t.module === module)?.file;
-  }
-
   remainingTotalMs() {
     return this.options.totalTimeoutMs - (performance.now() - this.startedAt);
   }
@@ -107,7 +103,7 @@ class Run {
       this.imports.push({ module: step.module, outcome: "failed", error, output });
       this.jobs.shift();
     } else if (step.kind === "load") {
-      this.modules.push({ file: this.fileOf(step.module), module: step.module, ok: false, error, output });
+      this.modules.push({ file: job.file, module: step.module, ok: false, error, output });
       for (const name of job.namesInSourceOrder) {
         this.tests.push({ file: job.file, name, outcome: "failed", error: `importing the test module: ${error}`, output });
       }
@@ -126,7 +122,11 @@ class Run {
         module: step.module, outcome: result.ok ? "passed" : "failed", error: result.error ?? null, output, ms,
       });
     } else if (step.kind === "load") {
-      this.modules.push({ file: job.file, module: step.module, ok: result.ok, error: result.error ?? null, output, ms });
+      // A module whose test timed out is loaded again by the next worker: record it once.
+      if (!job.loadRecorded) {
+        this.modules.push({ file: job.file, module: step.module, ok: result.ok, error: result.error ?? null, output, ms });
+      }
+      job.loadRecorded = true;
       if (!result.ok) {
         for (const name of job.namesInSourceOrder) {
           this.tests.push({
