@@ -1,0 +1,342 @@
+"""The simulator's command line (`openbricks sim ...`, or `python -m openbricks_sim.cli`).
+
+    openbricks sim preview [--world W] [--x X] [--y Y] [--yaw DEG] [--headless] [--duration S] [--seed N]
+    openbricks sim run SCRIPT [--world W] [--x X] [--y Y] [--yaw DEG] [--viewer] [--no-shim] [--seed N]
+                               [--chassis C] [--speed F] [--duration S] [--json]
+
+Positions follow the manual's simulator chapter: metres on the mat, yaw in degrees counter-clockwise
+from +x (MuJoCo's convention); inside, the simulator works in millimetres with Pybricks' clockwise
+heading. Without the `[sim]` extra (MuJoCo) every command prints how to install it, never a traceback.
+MuJoCo and the worlds are imported only once a command runs, so `--help` stays quick.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib.util
+import json
+import sys
+import time
+
+EXIT_OK = 0
+EXIT_FAILED = 1
+WORLD_NAMES = "empty, line_track, zones, arena, wro"  # kept in step with worlds.WORLDS by a test
+CHASSIS_NAMES = ("st3032", "jgb37")
+INSTALL_HINT = (
+    "the simulator needs MuJoCo, which comes with the [sim] extra: pipx install 'openbricks[sim]' "
+    "(or pip install 'openbricks[sim]')"
+)
+VIEWER_UNAVAILABLE = (
+    "the 3D viewer is not available in this version yet; run without it (preview: --headless), or use "
+    "--json and plot the result"
+)
+
+
+class SimCliError(Exception):
+    """A user error: printed as one line, exit status 1."""
+
+
+def _start_options(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument(
+        "--world", default="empty", help=f"World name ({WORLD_NAMES}) or an MJCF file. Default: %(default)s."
+    )
+    parser.add_argument(
+        "--chassis", default="st3032", choices=CHASSIS_NAMES, help="Robot build. Default: %(default)s."
+    )
+    parser.add_argument("--x", type=float, help="Start x on the mat, in metres. Default: the world's start.")
+    parser.add_argument("--y", type=float, help="Start y on the mat, in metres. Default: the world's start.")
+    parser.add_argument(
+        "--yaw",
+        type=float,
+        help="Start heading, degrees counter-clockwise from +x. Default: the world's start.",
+    )
+    parser.add_argument(
+        "--seed",
+        type=int,
+        default=0,
+        help="Seed of the world's random layout (props, noise); one seed always gives one run. Default: 0.",
+    )
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="openbricks sim", description="The MuJoCo simulator: the same hub programs, no robot needed."
+    )
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+
+    preview = sub.add_parser(
+        "preview",
+        help="load a world with the robot and show it",
+        description=(
+            "Load a world with the robot on it and open the viewer to look around; with --headless, step "
+            "the physics for --duration seconds instead and print where the robot ended (a smoke test)."
+        ),
+    )
+    _start_options(preview)
+    preview.add_argument(
+        "--headless", action="store_true", help="Do not open a window; just step the physics."
+    )
+    preview.add_argument(
+        "--duration",
+        type=float,
+        default=2.0,
+        help="Seconds of physics with --headless. Default: %(default)s.",
+    )
+
+    run = sub.add_parser(
+        "run",
+        help="run a hub program against the simulated robot",
+        description=(
+            "Run SCRIPT as the hub would, against the simulated robot and world, and print its output. "
+            "Without --viewer it runs headless, as fast as the computer allows (or at --speed)."
+        ),
+    )
+    run.add_argument("script", metavar="SCRIPT", help="The program file, as you would run it on a hub.")
+    _start_options(run)
+    run.add_argument("--viewer", action="store_true", help="Watch the run in the 3D viewer.")
+    run.add_argument(
+        "--no-shim",
+        action="store_true",
+        help=(
+            "Run SCRIPT as plain host Python that drives the simulator itself: it gets `simulation` (an "
+            "openbricks_sim Simulation of the chosen world) in its globals, and no hub modules are faked."
+        ),
+    )
+    run.add_argument(
+        "--speed",
+        type=float,
+        help="Pace the run at this multiple of real time (1 = real time). Default: unpaced.",
+    )
+    run.add_argument(
+        "--duration",
+        type=float,
+        default=60.0,
+        help="Simulated seconds before the run is cut off (exit time_limit). Default: %(default)s.",
+    )
+    run.add_argument(
+        "--wall-limit",
+        type=float,
+        default=None,
+        metavar="SECONDS",
+        help="Wall-clock seconds a run may take while simulated time stands still (a loop that never waits).",
+    )
+    run.add_argument(
+        "--json",
+        action="store_true",
+        help="Print one JSON object (exit reason, final pose, score, simulated and wall time), not text.",
+    )
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    if args.command is None:
+        parser.print_help()
+        return EXIT_OK
+    try:
+        _require_mujoco()
+        if args.command == "preview":
+            return _preview(args)
+        return _run(args)
+    except SimCliError as exc:
+        print(f"openbricks sim {args.command}: error: {exc}", file=sys.stderr)
+        return EXIT_FAILED
+
+
+def _require_mujoco() -> None:
+    try:
+        import mujoco  # noqa: F401
+    except ImportError as exc:
+        raise SimCliError(f"{INSTALL_HINT} ({exc})") from None
+
+
+def _start_pose(args, world) -> tuple[float, float, float] | None:
+    """(x_mm, y_mm, heading_deg) from the metre/yaw options, the world's start filling the gaps."""
+    if args.x is None and args.y is None and args.yaw is None:
+        return None
+    x_mm, y_mm, heading_deg = world.start_mm_deg
+    return (
+        x_mm if args.x is None else args.x * 1000.0,
+        y_mm if args.y is None else args.y * 1000.0,
+        heading_deg if args.yaw is None else -args.yaw,
+    )
+
+
+def _world(name: str):
+    from openbricks_sim.worlds import UnknownWorldError, resolve
+
+    try:
+        return resolve(name)
+    except UnknownWorldError as exc:
+        raise SimCliError(str(exc)) from None
+
+
+def _viewer_launcher():
+    """The viewer's entry point, or None while the viewer has not been built."""
+    if importlib.util.find_spec("openbricks_sim.viewer") is None:
+        return None
+    viewer = importlib.import_module("openbricks_sim.viewer")
+    return getattr(viewer, "launch", None)
+
+
+def _pose_dict(pose) -> dict:
+    return {
+        "x_mm": round(pose.x_mm, 3),
+        "y_mm": round(pose.y_mm, 3),
+        "heading_deg": round(pose.heading_deg, 3),
+    }
+
+
+def _preview(args) -> int:
+    world = _world(args.world)
+    if not args.headless:
+        launch = _viewer_launcher()
+        if launch is None:
+            raise SimCliError(VIEWER_UNAVAILABLE)
+        return (
+            launch(world=world, chassis=args.chassis, seed=args.seed, start_mm_deg=_start_pose(args, world))
+            or 0
+        )
+    if args.duration <= 0:
+        raise SimCliError(f"--duration {args.duration:g}: give a positive number of seconds")
+    from openbricks_sim.physics import Physics
+
+    physics = Physics(world, args.chassis, args.seed, _start_pose(args, world))
+    try:
+        started = time.perf_counter()
+        physics.step(int(round(args.duration * 1000)))
+        wall_s = time.perf_counter() - started
+        pose = physics.pose()
+    finally:
+        physics.close()
+    print(
+        f"{world.alias}: {args.duration:g} s of physics in {wall_s:.2f} s; robot at x={pose.x_mm:.1f} mm "
+        f"y={pose.y_mm:.1f} mm heading={pose.heading_deg:.2f} deg"
+    )
+    return EXIT_OK
+
+
+def _run(args) -> int:
+    from pathlib import Path
+
+    script = Path(args.script)
+    if not script.is_file():
+        raise SimCliError(f"{script}: no such program file")
+    try:
+        source = script.read_text(encoding="utf-8")
+    except UnicodeDecodeError as exc:
+        raise SimCliError(f"{script} is not UTF-8 text ({exc.reason} at byte {exc.start})") from None
+    if args.duration <= 0:
+        raise SimCliError(f"--duration {args.duration:g}: give a positive number of seconds")
+    if args.viewer and _viewer_launcher() is None:
+        raise SimCliError(VIEWER_UNAVAILABLE)
+    world = _world(args.world)
+    if args.no_shim:
+        return _run_unshimmed(args, world, script, source)
+    from openbricks_sim.run import FINISHED, TIME_LIMIT, run_program
+
+    result = run_program(
+        str(script),
+        world=args.world,
+        chassis=args.chassis,
+        seed=args.seed,
+        start_mm_deg=_start_pose(args, world),
+        speed=args.speed,
+        limit_ms=int(round(args.duration * 1000)),
+        wall_limit_s=args.wall_limit,
+        echo=None if args.json else _echo_to(sys.stdout),
+        source=source,
+    )
+    if args.json:
+        print(json.dumps(_summary(result)))
+    else:
+        if result.error:
+            sys.stderr.write(result.error if result.error.endswith("\n") else result.error + "\n")
+        pose = result.pose
+        print(
+            f"[{result.exit}] {result.sim_ms / 1000:.3f} s simulated in {result.wall_s:.2f} s "
+            f"({result.real_time_factor}x real time); robot at x={pose['x_mm']:.1f} mm "
+            f"y={pose['y_mm']:.1f} mm heading={pose['heading_deg']:.2f} deg",
+            file=sys.stderr,
+        )
+        if result.score is not None:
+            print(f"score: {json.dumps(result.score)}", file=sys.stderr)
+    return EXIT_OK if result.exit in (FINISHED, TIME_LIMIT) else EXIT_FAILED
+
+
+def _echo_to(stream):
+    """Live output to `stream`, bound now: during the run sys.stdout is the run's own collector."""
+
+    def echo(text: str) -> None:
+        stream.write(text)
+        stream.flush()
+
+    return echo
+
+
+def _summary(result) -> dict:
+    """The fields a script collects across seeds; the program's printed output is included too."""
+    return {
+        "exit": result.exit,
+        "pose": result.pose,
+        "score": result.score,
+        "sim_s": result.sim_ms / 1000,
+        "wall_s": result.wall_s,
+        "real_time_factor": result.real_time_factor,
+        "error": result.error,
+        "output": result.output,
+        "job": result.job,
+    }
+
+
+def _run_unshimmed(args, world, script, source) -> int:
+    """--no-shim: the script is host Python with `simulation` in its globals; what it raises is its result."""
+    import traceback
+
+    from openbricks_sim.simulation import Simulation
+
+    simulation = Simulation(
+        world,
+        args.chassis,
+        args.seed,
+        _start_pose(args, world),
+        speed=args.speed,
+        limit_ms=int(args.duration * 1000),
+    )
+    exit_reason, error = "finished", None
+    started = time.perf_counter()
+    try:
+        code = compile(source, str(script), "exec")
+        exec(code, {"__name__": "__main__", "__file__": str(script), "simulation": simulation})
+    except SystemExit:
+        pass
+    except BaseException as exc:  # noqa: BLE001 - the script's own failure is what we report
+        if type(exc).__name__ == "SimTimeLimit":
+            exit_reason = "time_limit"
+        else:
+            exit_reason, error = "error", "".join(traceback.format_exception(exc))
+    finally:
+        wall_s = time.perf_counter() - started
+        pose = simulation.physics.pose()
+        sim_ms = simulation.physics.now_ms
+        simulation.close()
+    summary = {
+        "exit": exit_reason,
+        "pose": _pose_dict(pose),
+        "score": None,
+        "sim_s": sim_ms / 1000,
+        "wall_s": round(wall_s, 4),
+        "error": error,
+    }
+    if args.json:
+        print(json.dumps(summary))
+    else:
+        if error:
+            sys.stderr.write(error)
+        print(f"[{exit_reason}] {sim_ms / 1000:.3f} s simulated in {wall_s:.2f} s", file=sys.stderr)
+    return EXIT_OK if exit_reason in ("finished", "time_limit") else EXIT_FAILED
+
+
+if __name__ == "__main__":
+    sys.exit(main())
