@@ -1,0 +1,379 @@
+"""The Python that code on a virtual hub sees: MicroPython's os, open, sys and import, on its flash.
+
+The hub process is CPython, and its own machinery (the link threads, MuJoCo, the simulator) must
+keep the host's `os`, `open` and `sys`. So hub code gets its own builtins module instead of patched
+process-wide modules:
+
+- `open` opens files on the hub's flash (HubFS), `import os` / `import uos` give the flash's
+  MicroPython `os`, `import sys` a `sys` with MicroPython's `path` (['', '.frozen', '/lib']),
+  `print_exception` and a hub `implementation`, and `import time` the simulator's MicroPython time
+  with sleeps paced by the hub (see world.py);
+- modules the hub has on its flash (a helper next to the program, a package under /lib) import
+  from there, compiled under their hub paths; a `.mpy` is refused with the reason (this hub runs
+  source);
+- the hub runtime (`openbricks`, frozen into real firmware) is imported with these builtins too, so
+  its run logs, staging and launcher work on the flash exactly as on a hub.
+
+Code the REPL runs goes through `HubPython.run()`, and tracebacks print as MicroPython prints
+them: frames of hub code only, and MicroPython's exception names (OSError for FileNotFoundError).
+"""
+
+import builtins
+import importlib.abc
+import importlib.machinery
+import importlib.util
+import os
+import sys
+import types
+
+from .hub_fs import HubFS
+
+RUNTIME_PACKAGE = "openbricks"
+FLASH_PATH_PREFIX = "<hub-flash>:"  # marks a package __path__ entry that lives on the hub's flash
+DEFAULT_SYS_PATH = ("", ".frozen", "/lib")
+MODULE_ALIASES = {"uos": "os", "utime": "time", "usys": "sys"}
+HIDDEN_BUILTINS = ("exit", "quit", "copyright", "credits", "license")
+# Names a hub resolves before its filesystem (built into the firmware), whatever the flash holds.
+_BUILTIN_NAMES = frozenset(sys.stdlib_module_names) | {
+    "machine",
+    "micropython",
+    "esp32",
+    "bluetooth",
+    "neopixel",
+    "_openbricks_native",
+    "deflate",
+    RUNTIME_PACKAGE,
+}
+
+
+# -- tracebacks --------------------------------------------------------------------------------
+
+
+def exception_name(exc):
+    """The name MicroPython gives this exception's class (it has no OSError subclasses)."""
+    if isinstance(exc, OSError):
+        return "OSError"
+    if isinstance(exc, ModuleNotFoundError):
+        return "ImportError"
+    if isinstance(exc, RecursionError):
+        return "RuntimeError"
+    return type(exc).__name__
+
+
+def exception_text(exc):
+    if isinstance(exc, OSError) and len(exc.args) == 1 and isinstance(exc.args[0], int):
+        import errno
+
+        code = exc.args[0]
+        return f"[Errno {code}] {errno.errorcode.get(code, code)}"
+    if isinstance(exc, KeyError) and len(exc.args) == 1:
+        return repr(exc.args[0])
+    return str(exc)
+
+
+class TracebackFormatter:
+    """MicroPython's traceback text for exceptions raised by hub code."""
+
+    def __init__(self, fs: HubFS, runtime_dir=None):
+        self._fs = fs
+        if runtime_dir is None:
+            spec = importlib.util.find_spec(RUNTIME_PACKAGE)
+            runtime_dir = os.path.dirname(spec.origin) if spec and spec.origin else None
+        self._runtime_parent = os.path.dirname(runtime_dir) + os.sep if runtime_dir else None
+
+    def _shown_name(self, filename):
+        """How the hub names a frame's file, or None for host code (hidden, as C is on a hub)."""
+        if filename.startswith("<") or not filename.startswith(os.sep):
+            return filename  # <stdin>, frozen boot.py / main.py
+        if self._runtime_parent and filename.startswith(self._runtime_parent + RUNTIME_PACKAGE + os.sep):
+            return filename[len(self._runtime_parent) :].replace(os.sep, "/")  # frozen: openbricks/...
+        try:
+            if os.path.isfile(self._fs.host_path(filename)):
+                return filename  # a hub path (the program, a module on the flash)
+        except (OSError, TypeError):
+            pass
+        return None
+
+    def format(self, exc):
+        lines = []
+        tb = exc.__traceback__
+        frames = []
+        while tb is not None:
+            code = tb.tb_frame.f_code
+            shown = self._shown_name(code.co_filename)
+            if shown is not None:
+                frames.append(f'  File "{shown}", line {tb.tb_lineno}, in {code.co_name}\n')
+            tb = tb.tb_next
+        if isinstance(exc, SyntaxError) and exc.lineno is not None:
+            frames.append(f'  File "{exc.filename}", line {exc.lineno}\n')
+        if frames:
+            lines.append("Traceback (most recent call last):\n")
+            lines.extend(frames)
+        if isinstance(exc, SyntaxError):
+            lines.append(f"SyntaxError: {exc.msg}\n")
+        else:
+            lines.append(f"{exception_name(exc)}: {exception_text(exc)}\n")
+        return "".join(lines)
+
+    def print_exception(self, exc, file=None):
+        """sys.print_exception(exc, file=sys.stdout), MicroPython's API."""
+        (file if file is not None else sys.stdout).write(self.format(exc))
+
+
+# -- imports -----------------------------------------------------------------------------------
+
+
+class _HubLoader(importlib.abc.Loader):
+    """Runs a module with the hub's builtins: a runtime module through its own loader, or a file
+    from the flash compiled under its hub path."""
+
+    def __init__(self, hub, inner=None, hub_path=None):
+        self._hub = hub
+        self._inner = inner
+        self.hub_path = hub_path
+
+    def create_module(self, spec):
+        return self._inner.create_module(spec) if self._inner is not None else None
+
+    def exec_module(self, module):
+        module.__dict__["__builtins__"] = self._hub.builtins
+        if self._inner is not None:
+            self._inner.exec_module(module)
+            return
+        module.__file__ = self.hub_path
+        with self._hub.fs.open(self.hub_path, "rb") as f:
+            source = f.read()
+        self._hub.flash_modules.add(module.__name__)
+        exec(compile(source, self.hub_path, "exec"), module.__dict__)
+
+    def is_package(self, fullname):
+        return self._inner.is_package(fullname) if self._inner is not None else False
+
+    def get_source(self, fullname):
+        if self._inner is not None:
+            return self._inner.get_source(fullname)
+        with self._hub.fs.open(self.hub_path, "r") as f:
+            return f.read()
+
+
+class HubFinder(importlib.abc.MetaPathFinder):
+    """On sys.meta_path of the hub process: the runtime and flash packages' submodules."""
+
+    def __init__(self, hub):
+        self._hub = hub
+
+    def find_spec(self, fullname, path=None, target=None):
+        if fullname == RUNTIME_PACKAGE or fullname.startswith(RUNTIME_PACKAGE + "."):
+            spec = importlib.machinery.PathFinder.find_spec(fullname, path)
+            if spec is None or spec.loader is None:
+                return None
+            spec.loader = _HubLoader(self._hub, inner=spec.loader)
+            return spec
+        if path:
+            flash_dirs = [p[len(FLASH_PATH_PREFIX) :] for p in path if str(p).startswith(FLASH_PATH_PREFIX)]
+            if flash_dirs:
+                return self._hub.find_on_flash(fullname, flash_dirs)
+        return None
+
+
+class _HubSys(types.ModuleType):
+    """`sys` for hub code: MicroPython's additions over the host's (everything else passes through)."""
+
+    def __getattr__(self, name):
+        return getattr(sys, name)
+
+
+class HubPython:
+    """Builtins, module facades and the REPL namespace of one virtual hub."""
+
+    def __init__(self, fs: HubFS, time_module, machine_name, input_fn=None):
+        self.fs = fs
+        self.flash_modules = set()  # modules imported from the flash (dropped at a soft reset)
+        self._time = time_module
+        self._machine_name = machine_name
+        self._input = input_fn
+        self.traceback = TracebackFormatter(fs)
+        self.finder = HubFinder(self)
+        self.reset()
+
+    # -- lifecycle ---------------------------------------------------------------------------------
+
+    def install(self):
+        """Put the hub's finder first on sys.meta_path (the process now hosts this hub)."""
+        if self.finder not in sys.meta_path:
+            sys.meta_path.insert(0, self.finder)
+
+    def uninstall(self):
+        if self.finder in sys.meta_path:
+            sys.meta_path.remove(self.finder)
+
+    def reset(self):
+        """A soft reset's fresh Python state: builtins, sys.path, cwd and the REPL namespace.
+
+        Modules are dropped with forget_modules(), separately, because the caller first stops
+        what the old runtime left running.
+        """
+        self.fs.cwd = "/"
+        self.os = self.fs.os_module()
+        self.os.dupterm = _no_dupterm
+        self.sys = self._make_sys()
+        self.builtins = self._make_builtins()
+        self.namespace = {"__name__": "__main__", "__builtins__": self.builtins}
+
+    def forget_modules(self):
+        """Drop the runtime and every flash module, so the next import loads them afresh."""
+        for name in list(sys.modules):
+            if (
+                name == RUNTIME_PACKAGE
+                or name.startswith(RUNTIME_PACKAGE + ".")
+                or name in self.flash_modules
+            ):
+                del sys.modules[name]
+        self.flash_modules.clear()
+        importlib.invalidate_caches()
+
+    def _make_sys(self):
+        module = _HubSys("sys", "MicroPython's sys on the virtual hub.")
+        module.path = list(DEFAULT_SYS_PATH)
+        module.argv = []
+        module.platform = "esp32"
+        module.print_exception = self.traceback.print_exception
+        impl = sys.implementation
+        module.implementation = types.SimpleNamespace(
+            name=impl.name,
+            version=impl.version,
+            cache_tag=impl.cache_tag,
+            hexversion=impl.hexversion,
+            _machine=self._machine_name,
+        )
+        return module
+
+    def _make_builtins(self):
+        module = types.ModuleType("builtins", builtins.__doc__)
+        module.__dict__.update(builtins.__dict__)
+        for name in HIDDEN_BUILTINS:
+            module.__dict__.pop(name, None)
+        module.open = self.fs.open
+        module.__import__ = self._import
+        module.help = _help
+        if self._input is not None:
+            module.input = self._input
+        return module
+
+    # -- imports -------------------------------------------------------------------------------------
+
+    def _facade(self, name):
+        name = MODULE_ALIASES.get(name, name)
+        if name == "os":
+            return self.os
+        if name == "sys":
+            return self.sys
+        if name == "builtins":
+            return self.builtins
+        if name == "time":
+            return self._time
+        return None
+
+    def _import(self, name, globals=None, locals=None, fromlist=(), level=0):
+        if level == 0:
+            top, _, rest = name.partition(".")
+            facade = self._facade(top)
+            if facade is not None:
+                if rest:
+                    raise ImportError(f"no module named '{name}'")
+                return facade
+            if top not in sys.modules and top not in _BUILTIN_NAMES:
+                self._import_from_flash(top)
+        return builtins.__import__(name, globals, locals, fromlist, level)
+
+    def _search_dirs(self):
+        dirs = []
+        for entry in self.sys.path:
+            if entry == ".frozen" or not isinstance(entry, str):
+                continue
+            dirs.append(self.fs.hub_path(entry or "."))
+        return dirs
+
+    def _import_from_flash(self, name):
+        spec = self.find_on_flash(name, self._search_dirs())
+        if spec is None:
+            return
+        module = importlib.util.module_from_spec(spec)
+        sys.modules[name] = module
+        try:
+            spec.loader.exec_module(module)
+        except BaseException:
+            sys.modules.pop(name, None)
+            self.flash_modules.discard(name)
+            raise
+
+    def find_on_flash(self, fullname, hub_dirs):
+        """The spec of module `fullname` in one of the flash directories, or None."""
+        leaf = fullname.rpartition(".")[2]
+        for directory in hub_dirs:
+            base = directory.rstrip("/") + "/" + leaf
+            package_init = base + "/__init__.py"
+            if self._is_file(package_init):
+                spec = importlib.util.spec_from_loader(
+                    fullname, _HubLoader(self, hub_path=package_init), origin=package_init, is_package=True
+                )
+                spec.submodule_search_locations = [FLASH_PATH_PREFIX + base]
+                return spec
+            if self._is_file(base + ".py"):
+                return importlib.util.spec_from_loader(
+                    fullname, _HubLoader(self, hub_path=base + ".py"), origin=base + ".py"
+                )
+            if self._is_file(base + ".mpy"):
+                raise ImportError(
+                    f"{base}.mpy is MicroPython bytecode, which a virtual hub cannot load: "
+                    f"copy the source ({leaf}.py) to the hub instead"
+                )
+        return None
+
+    def _is_file(self, hub_path):
+        try:
+            return os.path.isfile(self.fs.host_path(hub_path))
+        except OSError:
+            return False
+
+    # -- running code --------------------------------------------------------------------------------
+
+    def compile(self, source, filename="<stdin>", mode="exec"):
+        """Compile hub source (bytes or str); SyntaxError as hub code would raise it."""
+        if isinstance(source, bytes):
+            source = source.decode("utf-8", "replace")
+        return compile(source, filename, mode, dont_inherit=True)
+
+    def run(self, code):
+        """Execute compiled code in the REPL namespace (the caller handles exceptions)."""
+        exec(code, self.namespace)
+
+
+def _no_dupterm(stream=None, index=0):
+    """os.dupterm(): a virtual hub's console is its pty/stdio link, and it has no radio."""
+    import errno
+
+    if stream is None:
+        return None
+    raise OSError(
+        errno.EOPNOTSUPP,
+        "a virtual hub has no second terminal to attach (its console is the pty it was started on; "
+        "there is no BLE radio): keep BLE off on virtual hubs",
+    )
+
+
+def _help(obj=None):
+    if obj is not None:
+        print(getattr(obj, "__doc__", None) or f"no help for {obj!r}")
+        return
+    print(
+        "This is an openbricks virtual hub: a simulated ESP32-S3 hub running the openbricks runtime.\n"
+        "Programs run against the simulator; the filesystem is the hub's flash.\n\n"
+        "Control commands:\n"
+        "  CTRL-A        -- on a blank line, enter raw REPL mode\n"
+        "  CTRL-B        -- on a blank line, enter normal REPL mode\n"
+        "  CTRL-C        -- interrupt a running program\n"
+        "  CTRL-D        -- on a blank line, do a soft reset of the board\n"
+        "  CTRL-E        -- on a blank line, enter paste mode\n\n"
+        "Start with: import openbricks.host_calls as h; h.info()"
+    )
