@@ -304,3 +304,20 @@ def test_the_drive_base_takes_the_bridges_from_the_motors_own_controllers():
     db.straight(100)  # ... until the drive base takes both bridges
     assert not _openbricks_native.motor_process.is_subscribed(robot.left._servo)
     assert approx(robot.chassis.x_mm, 100, 2)
+
+
+def test_close_releases_the_wheels_and_leaves_the_motors_to_their_own_controllers():
+    import _openbricks_native
+
+    robot = EncoderRobot()
+    db = robot.drivebase()
+    db.drive(150, 0)
+    time.sleep_ms(300)
+    db.close()
+    time.sleep_ms(1)
+    assert robot.bridge_duties() == (None, None)
+    assert _openbricks_native.motor_process.count == 0
+    time.sleep_ms(500)  # let the coasting wheel roll to a stop
+    start = robot.left.angle()
+    robot.left.run_angle(300, 90)  # the motor's own servo core drives it again
+    assert approx(robot.left.angle() - start, 90, 2)
