@@ -283,6 +283,7 @@ class RawRepl:
         timeout_s: float | None = None,
         follow_drops: bool = False,
         on_link_event: Callable[[LinkEvent], None] | None = None,
+        stop_when: Callable[[ExecResult], bool] | None = None,
     ) -> list[ExecResult]:
         """Run several commands back to back, pipelined to spare round trips.
 
@@ -293,8 +294,9 @@ class RawRepl:
         (with its first windows) rides behind the previous command's end, so its grant comes back
         with the previous answer.
 
-        Stops at the first command that raises on the hub (HubException); a command already
-        requested behind it is cancelled with Ctrl-C before it compiles, so none of it runs.
+        Stops at the first command that raises on the hub (HubException), or after the first result
+        `stop_when(result)` is true for (returning the results so far); a command already requested
+        behind it is cancelled with Ctrl-C before it compiles, so none of it runs.
         With `follow_drops`, a link that drops while a command runs is reconnected and the
         command's output followed on (the hub keeps it meanwhile); otherwise LinkDropped.
         """
@@ -322,8 +324,13 @@ class RawRepl:
                     await self._cancel_requested_paste(early, timeout_s)
                 else:
                     await self._await_prompt(timeout_s)
-                raise HubException(self.hub, result.stderr.decode("utf-8", "replace"), result.stdout)
+                raise HubException(
+                    self.hub, result.stderr.decode("utf-8", "replace"), result.stdout, result.results
+                )
             results.append(result)
+            if stop_when is not None and stop_when(result) and requested:
+                await self._cancel_requested_paste(early, timeout_s)
+                break
         await self._await_prompt(timeout_s)
         return results
 
@@ -540,10 +547,8 @@ class RawRepl:
             )
         except HubException as exc:
             # A stopped run prints its result, then lets KeyboardInterrupt through.
-            lines = _ResultLines(None)
-            lines.feed(exc.stdout)
-            if lines.results and "KeyboardInterrupt" in exc.traceback:
-                return self._single_result("run", ExecResult(exc.stdout, b"", lines.results))
+            if exc.results and "KeyboardInterrupt" in exc.traceback:
+                return self._single_result("run", ExecResult(exc.stdout, b"", exc.results))
             raise
         return self._single_result("run", result)
 
@@ -610,7 +615,11 @@ class RawRepl:
                     )
                 sources.append("\n".join(parts))
         try:
-            results = await self.exec_many(sources, timeout_s=timeout_s)
+            results = await self.exec_many(
+                sources,
+                timeout_s=timeout_s,
+                stop_when=lambda result: any(not reply.get("ok", False) for reply in result.results),
+            )
         except LinkDropped as drop:
             raise LinkDropped(self.hub, drop.reason, f"uploading {path} ({size} bytes)") from None
         replies = [reply for result in results for reply in result.results]
@@ -637,7 +646,7 @@ class RawRepl:
             try:
                 result = await self.exec(source, timeout_s=timeout_s)
             except HubException as exc:
-                if "OSError" in exc.traceback and len(out) == 0:
+                if len(out) == 0 and ("OSError" in exc.traceback or "ENOENT" in exc.traceback):
                     raise LinkError(
                         f"{self.hub} has no readable file {path}: {exc.traceback.strip().splitlines()[-1]}"
                     ) from None

@@ -1,0 +1,300 @@
+"""The raw-REPL client against an emulated hub that speaks MicroPython's REPL byte for byte."""
+
+import asyncio
+import base64
+import os
+import zlib
+
+import pytest
+
+from openbricks_server.link import HubCallError, HubException, LinkError, LinkTimeout, ProtocolError
+from openbricks_server.link.raw_repl import RawRepl, _ResultLines, call_source, python_literal
+from tests.server.link.loopback import LoopbackLink
+from tests.server.link.scripted_hub import ScriptedHub
+
+
+def run(coro, timeout_s=30):
+    async def bounded():
+        async with asyncio.timeout(timeout_s):
+            return await coro
+
+    return asyncio.run(bounded())
+
+
+async def session(hub=None, **repl_kwargs):
+    hub = hub or ScriptedHub("RobotA")
+    link = LoopbackLink(hub)
+    await link.connect()
+    repl = RawRepl(link, timeout_s=repl_kwargs.pop("timeout_s", 5), **repl_kwargs)
+    await repl.enter()
+    return hub, link, repl
+
+
+def test_exec_returns_what_the_hub_printed():
+    async def scenario():
+        _, _, repl = await session()
+        result = await repl.exec("print(6 * 7)")
+        assert result.stdout == b"42\r\n" and result.stderr == b""
+
+    run(scenario())
+
+
+def test_an_exception_on_the_hub_raises_with_its_traceback_and_the_session_goes_on():
+    async def scenario():
+        _, _, repl = await session()
+        with pytest.raises(HubException, match="RobotA raised ZeroDivisionError") as caught:
+            await repl.exec("print('before'); 1/0")
+        assert "Traceback" in caught.value.traceback
+        assert caught.value.stdout == b"before\r\n"
+        assert (await repl.exec("print('still here')")).stdout == b"still here\r\n"
+
+    run(scenario())
+
+
+def test_enter_recovers_a_hub_left_in_the_middle_of_a_raw_paste():
+    async def scenario():
+        hub, link, repl = await session()
+        await link.write(b"\x05A\x01print('half")  # a previous session died mid-upload
+        await asyncio.sleep(0.05)
+        await repl.enter()
+        assert (await repl.exec("print('fresh')")).stdout == b"fresh\r\n"
+        assert not any("half" in command for command in hub.commands)
+
+    run(scenario())
+
+
+def test_enter_works_from_the_friendly_repl():
+    async def scenario():
+        hub = ScriptedHub("RobotA")
+        link = LoopbackLink(hub)
+        await link.connect()
+        repl = RawRepl(link, timeout_s=2)
+        await repl.enter()
+        await repl.exit()
+        await repl.enter()
+        assert (await repl.exec("print(1)")).stdout == b"1\r\n"
+
+    run(scenario())
+
+
+def test_soft_reset_comes_back_to_a_working_raw_repl():
+    async def scenario():
+        _, _, repl = await session()
+        await repl.soft_reset()
+        assert (await repl.exec("print(2)")).stdout == b"2\r\n"
+
+    run(scenario())
+
+
+def test_raw_paste_never_sends_more_than_the_hub_granted():
+    async def scenario():
+        hub, _, repl = await session(ScriptedHub("RobotA", stdin_buffer_max=256))
+        data = os.urandom(20_000)
+        await repl.put("/program.mpy", data, compress=False)
+        assert hub.files["/program.mpy"] == data
+        assert repl.paste_window == 128
+        assert hub.overflow_bytes == 0
+
+    run(scenario())
+
+
+def test_a_hub_without_raw_paste_gets_plain_raw_commands():
+    async def scenario():
+        hub, _, repl = await session(ScriptedHub("RobotA", raw_paste=False))
+        assert (await repl.exec("print('plain')")).stdout == b"plain\r\n"
+        await repl.put("/a.py", b"x = 1\n" * 300)
+        assert hub.files["/a.py"] == b"x = 1\n" * 300
+        assert repl.paste_window is None
+
+    run(scenario())
+
+
+def test_pipelined_commands_stop_at_the_first_failure_and_the_rest_never_runs():
+    async def scenario():
+        hub, _, repl = await session()
+        await repl.exec("print(0)")  # the window is known now: later commands go out early
+        with pytest.raises(HubException):
+            await repl.exec_many(["1/0", "print('second')", "print('third')"])
+        assert hub.commands[-1] == "1/0"
+        assert (await repl.exec("print('after')")).stdout == b"after\r\n"
+
+    run(scenario())
+
+
+def test_host_calls_return_their_result_and_failures_raise_with_the_hubs_reason():
+    async def scenario():
+        _, _, repl = await session()
+        info = await repl.info()
+        assert info.firmware == "openbricks 2.7.1 (emulated)" and "zlib" in info.compression
+        assert (await repl.set_rtc(1_700_000_000_000))["epoch_ms"] == 1_700_000_000_000
+        with pytest.raises(
+            HubCallError, match=r"stage_append on RobotA failed \(RuntimeError\): no upload in progress"
+        ):
+            await repl.call("stage_append", payload="AAAA")
+
+    run(scenario())
+
+
+def test_put_compresses_when_the_hub_can_inflate_and_verifies_the_result():
+    async def scenario():
+        hub, _, repl = await session()
+        await repl.info()
+        source = b"from openbricks.robotics import DriveBase\n" + b"robot.straight(100)\n" * 400
+        result = await repl.put("/program.py", source)
+        assert hub.files["/program.py"] == source
+        assert result["bytes"] == len(source) and result["crc32"] == zlib.crc32(source)
+        stage = next(command for command in hub.commands if "h.stage(" in command)
+        assert "compression='zlib'" in stage
+        assert len(stage) < len(source) / 4  # repetitive source: the wire carries a fraction of it
+
+    run(scenario())
+
+
+def test_put_sends_incompressible_data_as_is():
+    async def scenario():
+        hub, _, repl = await session()
+        await repl.info()
+        data = os.urandom(3000)
+        await repl.put("/blob.bin", data)
+        assert hub.files["/blob.bin"] == data
+        assert "compression=None" in hub.commands[-1]
+
+    run(scenario())
+
+
+def test_put_chunks_a_large_file_into_staged_appends():
+    async def scenario():
+        hub, _, repl = await session(ScriptedHub("RobotA", compression=()))
+        data = os.urandom(30_000)
+        await repl.put("/program.mpy", data, call_payload_chars=8192)
+        assert hub.files["/program.mpy"] == data
+        assert "stage_begin" in hub.commands[-5] and "stage_end" in hub.commands[-1]
+        assert sum("stage_append" in command for command in hub.commands) == 5
+
+    run(scenario())
+
+
+def test_a_failed_chunk_stops_the_upload_with_the_hubs_reason():
+    async def scenario():
+        hub, _, repl = await session(ScriptedHub("RobotA", compression=()))
+
+        def refuse(*_args, **_kwargs):
+            raise ValueError("program is larger than the hub accepts (4096 bytes max)")
+
+        original = hub._builtins
+
+        def builtins_with_small_hub():
+            names = original()
+            real_import = names["__import__"]
+
+            def hub_import(name, *args):
+                module = real_import(name, *args)
+                if name == "openbricks.host_calls":
+                    calls = module if hasattr(module, "stage_append") else module.host_calls
+                    calls.stage_append = lambda payload, encoding="base64": calls._call(refuse)
+                return module
+
+            names["__import__"] = hub_import
+            return names
+
+        hub._builtins = builtins_with_small_hub
+        with pytest.raises(HubCallError, match="larger than the hub accepts"):
+            await repl.put("/program.mpy", os.urandom(30_000), call_payload_chars=8192)
+        assert sum("stage_append" in command for command in hub.commands) == 1
+        assert "/program.mpy" not in hub.files
+
+    run(scenario())
+
+
+def test_run_streams_program_output_and_keeps_the_result_line_out_of_it():
+    async def scenario():
+        _, _, repl = await session()
+        await repl.put("/program.py", b"for i in range(4):\n    print('lap', i)\n    sleep_ms(20)\n")
+        chunks = []
+        result = await repl.run("/program.py", on_output=chunks.append)
+        assert result["outcome"] == "finished"
+        assert b"".join(chunks) == b"lap 0\r\nlap 1\r\nlap 2\r\nlap 3\r\n"
+        assert len(chunks) >= 2  # it arrived as the program printed, not in one piece at the end
+
+    run(scenario())
+
+
+def test_ctrl_c_stops_a_run_and_the_stop_is_an_outcome():
+    async def scenario():
+        _, _, repl = await session()
+        await repl.put("/program.py", b"while True:\n    print('tick')\n    sleep_ms(10)\n")
+        running = asyncio.create_task(repl.run("/program.py"))
+        await asyncio.sleep(0.1)
+        await repl.interrupt()
+        result = await running
+        assert result["outcome"] == "stopped"
+        assert (await repl.exec("print('ok')")).stdout == b"ok\r\n"
+
+    run(scenario())
+
+
+def test_get_reads_back_a_file_and_names_a_missing_one():
+    async def scenario():
+        hub, _, repl = await session()
+        hub.files["/data.bin"] = os.urandom(5000)
+        assert await repl.get("/data.bin") == hub.files["/data.bin"]
+        with pytest.raises(LinkError, match="RobotA has no readable file /nope"):
+            await repl.get("/nope")
+
+    run(scenario())
+
+
+def test_a_hub_that_never_answers_times_out_naming_the_wait():
+    async def scenario():
+        hub = ScriptedHub("RobotA")
+        link = LoopbackLink(hub)
+        await link.connect()
+        hub.feed = lambda data: None  # a hub that hears nothing
+        with pytest.raises(LinkTimeout, match="waiting for the raw REPL banner from RobotA after 0.1 s"):
+            await RawRepl(link, timeout_s=0.1).enter()
+
+    run(scenario())
+
+
+def test_garbage_during_a_paste_is_a_protocol_error():
+    async def scenario():
+        hub, link, repl = await session()
+        await repl.exec("print(0)")
+        original = hub._start_paste
+
+        def noisy_grant():
+            original()
+            hub._send(b"?")
+
+        hub._start_paste = noisy_grant
+        with pytest.raises(ProtocolError, match="RobotA sent b'\\?' during a raw-paste upload"):
+            await repl.put("/x.bin", os.urandom(2000), compress=False)
+
+    run(scenario())
+
+
+def test_result_lines_are_found_across_chunk_boundaries():
+    shown = []
+    lines = _ResultLines(shown.append)
+    for piece in (b"@open", b"bricks-res", b'ult {"ok": true, "n": 1}\r\n', b"@ not a result\r\n"):
+        lines.feed(piece)
+    lines.finish()
+    assert lines.results == [{"ok": True, "n": 1}]
+    assert b"".join(shown) == b"@ not a result\r\n"
+
+
+def test_host_call_arguments_are_data_only():
+    assert call_source("stage", {"payload": "QUJD", "size": 3, "compression": None}) == (
+        "import openbricks.host_calls as h;h.stage(payload='QUJD', size=3, compression=None)"
+    )
+    assert python_literal({"a": [1, 2.5, True]}) == "{'a': [1, 2.5, True]}"
+    with pytest.raises(ValueError, match="only finite numbers"):
+        python_literal(float("nan"))
+    with pytest.raises(ValueError, match="cannot be sent to the hub as data"):
+        python_literal(object())
+    with pytest.raises(ValueError, match="not a Python identifier"):
+        call_source("info(); import os", {})
+    # quotes and control characters in data stay inside the literal
+    tricky = "it's \x04 \x03 done"
+    assert eval(python_literal(tricky)) == tricky  # noqa: S307 - checking the literal round-trips
+    assert base64.b64decode(eval(python_literal(base64.b64encode(b"\x00\xff").decode()))) == b"\x00\xff"  # noqa: S307
