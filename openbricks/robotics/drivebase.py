@@ -11,6 +11,7 @@ above, the sign of a curve's radius picks the travel direction. Speeds in `setti
 wheel-deg/s and accelerations in wheel-deg/s^2, as the native core takes them.
 """
 
+import math
 import time
 
 from micropython import const
@@ -84,7 +85,7 @@ class DriveBase:
     # --- helpers -------------------------------------------------------------------------------
 
     def _closed(self, what):
-        """The native controller, after checking the pair has feedback and the wheels answer."""
+        """The native controller; RuntimeError naming the motors when the pair has no feedback."""
         if self._controller is None:
             raise RuntimeError(
                 "DriveBase.%s needs wheel feedback and %s / %s are open-loop motors; use drive() and "
@@ -109,22 +110,20 @@ class DriveBase:
             self.left.coast()
             self.right.coast()
 
-    def _fault(self):
-        """The controller's watchdog halt as the error that names the silent motor (or the gyro)."""
-        try:
-            self._controller.done()
-        except OSError as native_error:
-            return self._pair.fault_error(self._controller.fault() or (), native_error)
-        return None
-
     def _raise_if_halted(self):
-        if self._controller.fault() is not None:
-            raise self._fault()
+        """Raise the controller's watchdog halt as the error that names the silent motor (or gyro)."""
+        sides = self._controller.fault()
+        if sides is None:
+            return
+        try:
+            self._controller.done()  # raises the core's own description of the halt
+        except OSError as native_error:
+            raise self._pair.fault_error(sides, native_error) from None
 
     def _wheel_speeds_dps(self):
         """Measured (left, right) wheel speeds, wheel-deg/s, from the controller's observer."""
         _distance, speed_mm_s, _angle, rate_dps = self._controller.state()
-        sum_dps = speed_mm_s * 360.0 / (3.141592653589793 * self.wheel_diameter_mm)
+        sum_dps = speed_mm_s * 360.0 / (math.pi * self.wheel_diameter_mm)
         diff_dps = rate_dps * self.axle_track_mm / self.wheel_diameter_mm
         return sum_dps + diff_dps, sum_dps - diff_dps
 
@@ -193,7 +192,7 @@ class DriveBase:
         straight to duty, with no ramp and no feedback.
         """
         if self._controller is None:
-            wheel_dps = speed_mm_s * 360.0 / (3.141592653589793 * self.wheel_diameter_mm)
+            wheel_dps = speed_mm_s * 360.0 / (math.pi * self.wheel_diameter_mm)
             diff_dps = turn_rate_dps * self.axle_track_mm / self.wheel_diameter_mm
             self._open_loop_wheels("drive", wheel_dps + diff_dps, wheel_dps - diff_dps)
             return
@@ -288,8 +287,8 @@ class DriveBase:
         """
         if turn_acceleration is not None and self._pair.kind != "serial-bus":
             raise ValueError(
-                "settings(turn_acceleration=...) applies to serial-bus drive bases; on %s motors turn() "
-                "ramps at `acceleration`" % self._pair.kind
+                "settings(turn_acceleration=...) applies to serial-bus drive bases only, and these are "
+                "%s motors (on encoder motors turn() ramps at `acceleration`)" % self._pair.kind
             )
         values = (straight_speed, turn_rate, acceleration, turn_acceleration)
         for i, name in enumerate(("straight_speed", "turn_rate", "acceleration", "turn_acceleration")):
