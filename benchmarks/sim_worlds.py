@@ -95,13 +95,16 @@ def _sensor_costs() -> list[Row]:
         physics.close()
 
 
+# VmHWM, not getrusage's ru_maxrss: Linux carries ru_maxrss across exec, so a child started from
+# this (by then large) benchmark process would report the parent's peak instead of its own.
 _RSS_PROBE = """
-import resource
 from openbricks_sim.simulation import Simulation
 sim = Simulation("wro", "st3032", seed=0)
 sim.physics.step(1000)
 sim.close()
-print(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024)
+with open("/proc/self/status") as status:
+    peak_kb = next(int(line.split()[1]) for line in status if line.startswith("VmHWM:"))
+print(peak_kb / 1024)
 """
 
 
