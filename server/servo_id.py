@@ -1,0 +1,153 @@
+"""Scanning a serial servo bus and re-IDing a servo through a USB half-duplex adapter.
+
+The same rules as the hub's `servo_set_id` (openbricks.host_calls), which serves `servo-id -n`:
+- the tool never guesses: with more than one servo answering, the caller names `old_id`;
+- a new id already in use is refused (two servos on one id answer on top of each other);
+- the write is checked by reading the id register back from the new id, and by the old id falling
+  silent; only then is the change reported.
+
+Packets are built and parsed by the firmware's own SCS codec (`openbricks_native.scs`). Half-duplex
+adapters often hear their own transmission: an echo of the request ahead of the reply is skipped.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+from openbricks_server.errors import CliError
+
+FIRST_ID = 0
+LAST_ID = 253
+_UNLOCK, _LOCK = b"\x00", b"\x01"
+
+
+class ServoIdError(CliError):
+    """The bus or the servo did not do what re-IDing needs."""
+
+
+def check_id(option: str, value: int | None) -> None:
+    if value is not None and not FIRST_ID <= value <= LAST_ID:
+        raise ServoIdError(
+            f"{option} {value}: servo bus ids are {FIRST_ID}..{LAST_ID} (254 is the broadcast id)"
+        )
+
+
+@dataclass(frozen=True)
+class Reid:
+    old_id: int
+    new_id: int
+    ids_after: list[int]
+    changed: bool
+
+
+class UsbServoBus:
+    """One serial port with servos on it; each request waits `timeout_s` at most for its reply."""
+
+    def __init__(self, port: str, baudrate: int, timeout_s: float):
+        import serial
+
+        from openbricks_native import scs
+
+        self.scs = scs
+        self.port = port
+        self.timeout_s = timeout_s
+        try:
+            self.serial = serial.Serial(port, baudrate, timeout=min(timeout_s, 0.01))
+        except (serial.SerialException, OSError) as exc:
+            raise ServoIdError(
+                f"cannot open {port} ({exc}); check the port name and your permissions"
+            ) from None
+
+    def close(self) -> None:
+        self.serial.close()
+
+    def __enter__(self) -> UsbServoBus:
+        return self
+
+    def __exit__(self, *exc_info) -> None:
+        self.close()
+
+    def _transfer(self, packet: bytes, servo_id: int):
+        """Send `packet`; the status reply from `servo_id`, or None if none came in time."""
+        self.serial.reset_input_buffer()
+        self.serial.write(packet)
+        self.serial.flush()
+        buffer = b""
+        echo_skipped = False
+        deadline = time.monotonic() + self.timeout_s
+        while time.monotonic() < deadline:
+            buffer += self.serial.read(64)
+            if not echo_skipped and len(buffer) >= len(packet) and buffer.startswith(packet):
+                buffer = buffer[len(packet) :]
+                echo_skipped = True
+            while buffer:
+                status = self.scs.decode_status(buffer)
+                if status.result == "ok" and status.id == servo_id:
+                    return status
+                if status.result == "need_more" and not status.consumed:
+                    break  # a frame still arriving
+                buffer = buffer[max(status.consumed, 1) :]  # noise or another servo's frame: drop, look on
+        return None
+
+    def ping(self, servo_id: int) -> bool:
+        return self._transfer(self.scs.ping(servo_id), servo_id) is not None
+
+    def read(self, servo_id: int, register: int, length: int) -> bytes | None:
+        status = self._transfer(self.scs.read(servo_id, register, length), servo_id)
+        return None if status is None else bytes(status.params)
+
+    def write(self, servo_id: int, register: int, data: bytes, expect_reply_from: int | None = None) -> bool:
+        replier = servo_id if expect_reply_from is None else expect_reply_from
+        return self._transfer(self.scs.write(servo_id, register, data), replier) is not None
+
+    def scan(self) -> list[int]:
+        return [servo_id for servo_id in range(FIRST_ID, LAST_ID + 1) if self.ping(servo_id)]
+
+    def where(self) -> str:
+        return f"the bus on {self.port}"
+
+
+def reid(bus: UsbServoBus, new_id: int, old_id: int | None) -> Reid:
+    """Give one servo `new_id`, verified by read-back; see the module rules."""
+    check_id("new id", new_id)
+    check_id("--old-id", old_id)
+    scs = bus.scs
+    ids = bus.scan()
+    listed = ", ".join(str(i) for i in ids)
+    if not ids:
+        raise ServoIdError(
+            f"no servo answers on {bus.where()}: check its power and the data wiring, then --scan"
+        )
+    if old_id is None:
+        if len(ids) > 1:
+            raise ServoIdError(
+                f"{len(ids)} servos answer (ids {listed}): pass --old-id to say which one to re-ID; it is "
+                "never guessed"
+            )
+        old_id = ids[0]
+    elif old_id not in ids:
+        raise ServoIdError(f"no servo answers at --old-id {old_id}; the bus has ids {listed}")
+    if new_id == old_id:
+        return Reid(old_id, new_id, ids, False)
+    if new_id in ids:
+        raise ServoIdError(
+            f"id {new_id} is already taken by another servo on the bus (in use: {listed}); pick a free id"
+        )
+    if not bus.write(old_id, scs.REG_LOCK, _UNLOCK):
+        raise ServoIdError(f"servo {old_id} did not acknowledge the EEPROM unlock; nothing was changed")
+    # The servo answers an id write from its new id (or not at all): the read-back is the real check.
+    bus.write(old_id, scs.REG_ID, bytes((new_id,)), expect_reply_from=new_id)
+    bus.write(new_id, scs.REG_LOCK, _LOCK)
+    readback = bus.read(new_id, scs.REG_ID, 1)
+    if readback is None or readback[0] != new_id:
+        raise ServoIdError(
+            f"servo {old_id} did not come back as id {new_id} after the write: --scan to see where it is"
+        )
+    after = bus.scan()
+    if old_id in after:
+        raise ServoIdError(
+            f"a servo still answers at id {old_id} after the re-ID (two servos shared that id?): wire one "
+            "servo at a time and retry"
+        )
+    return Reid(old_id, new_id, after, True)
