@@ -43,18 +43,16 @@ def _drop_modules_under_test():
 
 
 _HARNESS_FRAME = '  File "' + __file__ + '"'
-_source_lines = {}
 
 
 def _source_line(path, line_no):
-    lines = _source_lines.get(path)
-    if lines is None:
-        try:
-            with open(path) as f:
-                lines = f.read().split("\n")
-        except OSError:
-            lines = []
-        _source_lines[path] = lines
+    # Read afresh each time (only failures get here): a test may rewrite a file it staged, such as
+    # a program under /tmp, between two tracebacks that name the same path.
+    try:
+        with open(path) as f:
+            lines = f.read().split("\n")
+    except OSError:
+        return ""
     if 0 < line_no <= len(lines):
         return lines[line_no - 1].strip()
     return ""
