@@ -89,7 +89,9 @@ class BusPort:
     # --- who drives the wheels ---------------------------------------------------------------
 
     def give_to_drivebase(self, controller, slots):
-        """The drive base's controller drives `slots` from now on; direct commands there stand down."""
+        """The drive base's controller drives `slots` from now on; direct commands there stand down.
+
+        The caller subscribes the controller (after everything else has let go of the wheels)."""
         import _openbricks_native
 
         process = _openbricks_native.motor_process
@@ -98,8 +100,12 @@ class BusPort:
             if servo is not None:
                 process.unsubscribe(servo)
         self._base = (controller, slots)
-        process.subscribe(controller)
         estop.on_engage(self.halt)  # again after each program boundary, which forgets the halts
+
+    def forget_drivebase(self, controller):
+        """`controller` no longer drives this port's wheels (DriveBase.close())."""
+        if self._base is not None and self._base[0] is controller:
+            self._base = None
 
     def _take_from_drivebase(self, slot):
         base = self._base

@@ -33,6 +33,9 @@ _KIND_PHRASES = {
 }
 
 _ports = {}  # uart id -> BusPort of the engine that owns that UART
+# id(motor) -> the drive base controller driving it; a motor has one driver, so a second drive base
+# built over the same motors takes them from the first instead of fighting it every tick.
+_drivers = {}
 
 
 def _is_serial_bus(motor):
@@ -79,6 +82,32 @@ class _Pair:
     def __init__(self, left, right):
         self.motors = (left, right)
 
+    def take(self, controller):
+        """Make `controller` the one driver of both wheels (subscribed to motor_process)."""
+        import _openbricks_native
+
+        process = _openbricks_native.motor_process
+        for motor in self.motors:
+            previous = _drivers.get(id(motor))
+            if previous is not None and previous is not controller:
+                previous.stop("coast")
+                process.unsubscribe(previous)
+            _drivers[id(motor)] = controller
+        self._hand_over(controller, process)
+        process.subscribe(controller)
+
+    def _hand_over(self, controller, process):
+        """Stand down whatever else drives the wheels (the motors' own controllers)."""
+
+    def release(self, controller):
+        """Stop ticking `controller`; the motors have no drive base driver afterwards."""
+        import _openbricks_native
+
+        _openbricks_native.motor_process.unsubscribe(controller)
+        for motor in self.motors:
+            if _drivers.get(id(motor)) is controller:
+                del _drivers[id(motor)]
+
     def check(self):
         """Raise if a wheel has stopped answering; a pair that cannot tell does nothing."""
 
@@ -99,18 +128,9 @@ class EncoderPair(_Pair):
             io["coast_" + side] = motor._bridge.coast
         return io
 
-    def take(self, controller):
-        import _openbricks_native
-
-        process = _openbricks_native.motor_process
+    def _hand_over(self, controller, process):
         for motor in self.motors:
             process.unsubscribe(motor._servo)  # one driver per bridge
-        process.subscribe(controller)
-
-    def release(self, controller):
-        import _openbricks_native
-
-        _openbricks_native.motor_process.unsubscribe(controller)
 
 
 class OpenLoopPair(_Pair):
@@ -159,7 +179,7 @@ class SerialBusPair(_Pair):
             io.update(io_kwargs(port.engine.motor_io(slot), side))
         return io
 
-    def take(self, controller):
+    def _hand_over(self, controller, process):
         by_port = {}
         for port, slot in self.wheels:
             by_port.setdefault(id(port), (port, []))[1].append(slot)
@@ -167,9 +187,9 @@ class SerialBusPair(_Pair):
             port.give_to_drivebase(controller, slots)
 
     def release(self, controller):
-        import _openbricks_native
-
-        _openbricks_native.motor_process.unsubscribe(controller)
+        _Pair.release(self, controller)
+        for port, _slot in self.wheels:
+            port.forget_drivebase(controller)
 
     def check(self):
         for port, slot in self.wheels:

@@ -321,3 +321,19 @@ def test_close_releases_the_wheels_and_leaves_the_motors_to_their_own_controller
     start = robot.left.angle()
     robot.left.run_angle(300, 90)  # the motor's own servo core drives it again
     assert approx(robot.left.angle() - start, 90, 2)
+
+
+def test_a_second_drive_base_over_the_same_motors_takes_them_from_the_first():
+    import _openbricks_native
+
+    robot = EncoderRobot()
+    first = robot.drivebase()
+    first.drive(150, 0)
+    time.sleep_ms(300)
+    second = robot.drivebase()
+    second.straight(100)
+    assert _openbricks_native.motor_process.count == 1  # only the second one drives
+    assert first.done()  # the first one's drive() was ended, not left fighting
+    x = robot.chassis.x_mm
+    time.sleep_ms(300)
+    assert approx(robot.chassis.x_mm, x, 1)
