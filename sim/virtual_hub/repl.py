@@ -16,7 +16,9 @@ difference (mpremote, the openbricks host client and paste-probe all parse these
   free), then one `\\x01` each time a window of data has been consumed; the host's `\\x04` ends the
   data and is answered with `\\x04`, and the output follows as in raw mode. `\\x05` with any other
   letter gets `R\\x00` (unsupported). A host that sends more than it was granted overflows a real
-  hub's stdin ring buffer: the excess is dropped here too (and counted), so the bug shows;
+  hub's stdin ring buffer: the excess is dropped here too (and counted), so the bug shows. A grant
+  counts from the next read of the link on: bytes that arrived together with the bytes that earned
+  it were sent before the host could have seen it;
 - while code runs, Ctrl-C interrupts it and every other byte waits as stdin; what the code did not
   read is read by the REPL after it ends, as on the hub, where those bytes sit in the UART buffer.
 
@@ -73,13 +75,14 @@ class Interrupt:
 
 
 def _needs_more_input(source):
-    """True while a friendly-REPL entry is an unfinished compound statement or bracket."""
+    """True while a friendly-REPL entry (lines, each ending in a newline) is an unfinished compound
+    statement or bracket."""
     text = source.decode("utf-8", "replace")
-    lines = text.split("\n")
-    if lines[-1].strip() == "" and len(lines) > 1:
+    lines = text.split("\n")[:-1]
+    if len(lines) > 1 and not lines[-1].strip():
         return False  # an empty line ends a block, as at the MicroPython prompt
     try:
-        return codeop.compile_command(text, "<stdin>", "single") is None
+        return codeop.compile_command(text[:-1], "<stdin>", "single") is None
     except (SyntaxError, OverflowError, ValueError):
         return False  # let the executor report it
 
@@ -100,6 +103,7 @@ class ReplProtocol:
         self._paste = None  # bytearray while in friendly paste mode
         self._raw_paste = None  # bytearray while receiving raw-paste data
         self._credit = 0  # raw-paste bytes the host may still send
+        self._grant_in_flight = 0  # granted during the current feed(): usable from the next one
         self._since_ack = 0  # raw-paste bytes consumed since the last window grant
         self._escape = 0  # friendly: where we are in an escape sequence being swallowed
         self._after_cr = False
@@ -129,6 +133,8 @@ class ReplProtocol:
     def feed(self, data):
         """Process bytes from the host; returns the events for the executor, in order."""
         events = []
+        self._credit += self._grant_in_flight
+        self._grant_in_flight = 0
         for byte in data:
             if self._running is not None:
                 if byte == CTRL_C:
@@ -189,7 +195,8 @@ class ReplProtocol:
         # The window size implicitly frees one window; the trailing 0x01 frees a second one.
         self._write(b"R\x01" + struct.pack("<H", window) + b"\x01")
         self._raw_paste = bytearray()
-        self._credit = 2 * window
+        self._credit = 0
+        self._grant_in_flight = 2 * window
         self._since_ack = 0
         return None
 
@@ -213,7 +220,7 @@ class ReplProtocol:
         self._since_ack += 1
         if self._since_ack == self.paste_window:
             self._since_ack = 0
-            self._credit += self.paste_window
+            self._grant_in_flight += self.paste_window
             self._write(b"\x01")
         return None
 
@@ -323,6 +330,7 @@ class ReplProtocol:
         self._reset_entry()
         self._paste = None
         self._raw_paste = None
+        self.stdin.clear()  # a reset loses what sat in the UART buffer
         self._running = BOOT
 
     def execution_done(self, error_text=None):
