@@ -6,9 +6,9 @@ exactly one result line: RESULT_MARKER followed by a JSON object with `"ok": tru
 Program output printed before the result line (by `run`) is the program's own, streamed as it runs.
 
 Calls: info, set_rtc, stage, stage_begin / stage_append / stage_end, run, runs, read_run, idle,
-record_provenance, servo_scan, servo_set_id. Binary payloads travel as base64 text, optionally
-zlib-compressed (the hub has `deflate`), because raw-REPL input is text and base64 of compressed bytes
-is shorter than a Python bytes literal of the originals.
+record_provenance, set_hub_name, servo_scan, servo_set_id. Binary payloads travel as base64 text,
+optionally zlib-compressed (the hub has `deflate`), because raw-REPL input is text and base64 of
+compressed bytes is shorter than a Python bytes literal of the originals.
 """
 
 import binascii
@@ -365,6 +365,29 @@ def record_provenance(verdict):
         return {"firmware": openbricks.firmware_label()}
 
     return _call(_record)
+
+
+_MAX_NAME_BYTES = 26  # what fits in a legacy BLE advertisement beside the flags
+
+
+def _set_hub_name(name):
+    from openbricks import bluetooth
+
+    if not isinstance(name, str) or not name or len(name.encode()) > _MAX_NAME_BYTES:
+        raise ValueError(
+            "name=%r: give 1..%d bytes of text (it is advertised over BLE)" % (name, _MAX_NAME_BYTES)
+        )
+    import esp32
+
+    nvs = esp32.NVS(bluetooth.NVS_NAMESPACE)
+    nvs.set_blob(bluetooth.NVS_KEY_HUB_NAME, name.encode())
+    nvs.commit()
+    return {"hub_name": bluetooth.hub_name()}  # read back from NVS, so the host can verify it
+
+
+def set_hub_name(name):
+    """Store the name the hub advertises (what `openbricks flash --name` sets) and read it back."""
+    return _call(_set_hub_name, name)
 
 
 # -- servo bus: scan and re-ID through the hub ---------------------------------------------------

@@ -50,6 +50,11 @@ def locks_dir() -> Path:
     return ensure(data_dir() / "locks")
 
 
+def virtual_hubs_dir() -> Path:
+    """Virtual hubs announce themselves here, one folder per hub (the simulator computes the same path)."""
+    return data_dir() / "virtual-hubs"
+
+
 def firmware_cache_dir() -> Path:
     """Downloaded firmware releases, by version."""
     return ensure(cache_dir() / "firmware")
