@@ -138,12 +138,7 @@ def _native_wipe():
 def traceback_text(exc):
     """The full traceback of `exc` as text, on MicroPython and on CPython (the simulator)."""
     buf = io.StringIO()
-    if hasattr(sys, "print_exception"):
-        sys.print_exception(exc, buf)
-    else:
-        import traceback  # CPython only: the simulator's runtime
-
-        traceback.print_exception(type(exc), exc, exc.__traceback__, file=buf)
+    sys.print_exception(exc, buf)  # on CPython the simulator provides MicroPython's sys.print_exception
     return buf.getvalue()
 
 

@@ -14,6 +14,7 @@ their own (sim.run does), never in a daemon or CLI process.
 """
 
 import sys
+import traceback
 import types
 
 from . import bluetooth, esp32, machine, micropython, mptime, neopixel
@@ -35,6 +36,11 @@ def native_module(serial_bus):
     # must not start a Timer tick of its own (openbricks.robotics.tick asks this).
     module.ticks_itself = True
     return module
+
+
+def print_exception(exc, file=None):
+    """MicroPython's sys.print_exception(exc, file=sys.stdout): the runtime prints tracebacks with it."""
+    traceback.print_exception(type(exc), exc, exc.__traceback__, file=sys.stdout if file is None else file)
 
 
 def _is_runtime(name):
@@ -80,6 +86,9 @@ class Shim:
                 "_openbricks_native": native_module(sim.serial_bus),
             }
         )
+        self._added_print_exception = not hasattr(sys, "print_exception")
+        if self._added_print_exception:
+            sys.print_exception = print_exception
         _installed[0] = self
         return self
 
@@ -100,6 +109,8 @@ class Shim:
         mptime.bind(None)
         micropython.bind(None)
         esp32.bind(None)
+        if self._added_print_exception:
+            del sys.print_exception
         _installed[0] = None
 
     def __enter__(self):

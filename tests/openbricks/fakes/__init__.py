@@ -19,6 +19,12 @@ _BOARD_RUNTIME = (
 )
 
 
+def _print_exception(exc, file=None):
+    import traceback
+
+    traceback.print_exception(type(exc), exc, exc.__traceback__, file=sys.stdout if file is None else file)
+
+
 def install():
     sys.modules["machine"] = machine
     sys.modules["esp32"] = esp32
@@ -32,6 +38,8 @@ def install():
         sys.modules["micropython"] = micropython
         sys.modules["framebuf"] = framebuf  # built into MicroPython
         sys.modules["deflate"] = deflate  # built into MicroPython
+        if not hasattr(sys, "print_exception"):
+            sys.print_exception = _print_exception  # built into MicroPython
         try:
             import openbricks_native
 
