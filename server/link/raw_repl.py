@@ -45,6 +45,8 @@ PASTE_ENTER = b"\x05A\x01"
 RESULT_MARKER = b"@openbricks-result "
 
 DEFAULT_TIMEOUT_S = 10.0
+ENTER_RETRY_S = 1.0  # a booting hub can miss the first Ctrl-C / Ctrl-A: they are sent again this often
+QUIET_S = 0.3  # silence that means a hub has answered every request sent so far
 DEFAULT_RUN_TIMEOUT_S = 600.0
 PLAIN_RAW_CHUNK_BYTES = 256  # the stock hub's stdin ring holds 260: no flow control without raw-paste
 PLAIN_RAW_PACE_S = 0.01
@@ -217,27 +219,66 @@ class RawRepl:
     (the daemon serialises commands per hub); `interrupt()` is the exception, it may be sent any time.
     """
 
-    def __init__(self, link: Link, *, timeout_s: float = DEFAULT_TIMEOUT_S, use_raw_paste: bool = True):
+    def __init__(
+        self,
+        link: Link,
+        *,
+        timeout_s: float = DEFAULT_TIMEOUT_S,
+        use_raw_paste: bool = True,
+        send_ahead: bool = False,
+    ):
         self.link = link
         self.hub = link.hub
         self.timeout_s = timeout_s
         #: Bytes per raw-paste flow-control window, as the hub granted it (None until the first paste).
         self.paste_window: int | None = None
         self._raw_paste = use_raw_paste
+        #: Send a command's first two windows along with its paste request (see exec_many).
+        self.send_ahead = send_ahead
         self._prompt_pending = False
         self.info_cache: HubInfo | None = None
 
     # -- session --------------------------------------------------------------------------------
 
-    async def enter(self, *, soft_reset: bool = False, timeout_s: float | None = None) -> None:
-        """Stop whatever runs and enter the raw REPL (from any state: friendly REPL, raw, mid-paste)."""
+    async def enter(
+        self, *, soft_reset: bool = False, timeout_s: float | None = None, retry_s: float = ENTER_RETRY_S
+    ) -> None:
+        """Stop whatever runs and enter the raw REPL, from any state (friendly REPL, raw, mid-paste,
+        a program running). A hub still booting may miss the request: it is repeated every
+        `retry_s` until the banner comes or `timeout_s` runs out."""
         timeout_s = self.timeout_s if timeout_s is None else timeout_s
-        await self.link.write(b"\r" + CTRL_C + CTRL_C)
-        await self.link.write(b"\r" + CTRL_A)
-        await self.link.read_until(RAW_BANNER + b">", "the raw REPL banner", timeout_s)
+        loop = asyncio.get_running_loop()
+        deadline = loop.time() + timeout_s
+        attempts = 0
+        while True:
+            attempts += 1
+            await self.link.write(b"\r" + CTRL_C + CTRL_C)
+            await self.link.write(b"\r" + CTRL_A)
+            wait_s = min(retry_s, deadline - loop.time())
+            try:
+                await self.link.read_until(RAW_BANNER + b">", "the raw REPL banner", max(wait_s, 0))
+                break
+            except LinkTimeout:
+                if loop.time() >= deadline:
+                    raise LinkTimeout("the raw REPL banner", self.hub, timeout_s) from None
+        if attempts > 1:
+            # Earlier requests may still be answered: let those banners arrive, drop them, ask once more.
+            await self._discard_until_quiet(QUIET_S, deadline)
+            await self.link.write(CTRL_A)
+            await self.link.read_until(
+                RAW_BANNER + b">", "the raw REPL banner", max(deadline - loop.time(), 0)
+            )
         self._prompt_pending = False
         if soft_reset:
             await self.soft_reset(timeout_s=timeout_s)
+
+    async def _discard_until_quiet(self, quiet_s: float, deadline: float) -> None:
+        loop = asyncio.get_running_loop()
+        while loop.time() < deadline:
+            try:
+                await self.link.read_some("silence", min(quiet_s, max(deadline - loop.time(), 0)))
+            except LinkTimeout:
+                return
 
     async def soft_reset(self, *, timeout_s: float | None = None) -> None:
         """Ctrl-D on an empty raw-REPL line: the hub restarts its VM and comes back in the raw REPL."""
@@ -288,11 +329,12 @@ class RawRepl:
         """Run several commands back to back, pipelined to spare round trips.
 
         Raw-paste costs a round trip before the data (request, then the hub's grant) and one after
-        (end, then the answer). Two things hide the first: once the hub's window is known (from an
-        earlier grant in this session), a command's first 2 windows go out right behind its request,
-        which the hub can buffer by the protocol's own credit rule; and the next command's request
-        (with its first windows) rides behind the previous command's end, so its grant comes back
-        with the previous answer.
+        (end, then the answer). The next command's request rides behind the previous command's end,
+        so its grant comes back with the previous answer instead of costing a round trip of its own.
+        With `send_ahead` (off by default), once the window is known from an earlier grant in this
+        session, a command's first two windows also go out right behind its request: a hub's stdin
+        ring holds them (it is sized for two windows plus a few bytes, and is empty then), but a
+        hub model that only credits bytes sent after the grant was seen counts them as overrun.
 
         Stops at the first command that raises on the hub (HubException), or after the first result
         `stop_when(result)` is true for (returning the results so far); a command already requested
@@ -336,8 +378,10 @@ class RawRepl:
 
     def _early_length(self, blob: bytes) -> int:
         """How much of a command may go out with its paste request: the 2 windows the grant will
-        give, once a grant in this session told the window (0 before)."""
-        return 0 if self.paste_window is None else min(len(blob), 2 * self.paste_window)
+        give, once a grant in this session told the window (0 before, or with `send_ahead` off)."""
+        if not self.send_ahead or self.paste_window is None:
+            return 0
+        return min(len(blob), 2 * self.paste_window)
 
     async def _read_paste_grant(self, timeout_s: float, early: int = 0) -> int | None:
         """The hub's answer to `\\x05A\\x01`: the window size, or None if it only speaks plain raw."""

@@ -98,6 +98,18 @@ def test_raw_paste_never_sends_more_than_the_hub_granted():
     run(scenario())
 
 
+def test_sending_ahead_stays_within_what_the_hubs_stdin_ring_holds():
+    async def scenario():
+        hub, _, repl = await session(ScriptedHub("RobotA", stdin_buffer_max=256), send_ahead=True)
+        await repl.exec("print(0)")
+        sources = [f"x = {'1' * 600}\nprint(len(str(x)))" for _ in range(4)]
+        results = await repl.exec_many(sources)
+        assert [result.stdout for result in results] == [b"600\r\n"] * 4
+        assert hub.overflow_bytes == 0
+
+    run(scenario())
+
+
 def test_a_hub_without_raw_paste_gets_plain_raw_commands():
     async def scenario():
         hub, _, repl = await session(ScriptedHub("RobotA", raw_paste=False))
@@ -111,8 +123,8 @@ def test_a_hub_without_raw_paste_gets_plain_raw_commands():
 
 def test_pipelined_commands_stop_at_the_first_failure_and_the_rest_never_runs():
     async def scenario():
-        hub, _, repl = await session()
-        await repl.exec("print(0)")  # the window is known now: later commands go out early
+        hub, _, repl = await session(send_ahead=True)
+        await repl.exec("print(0)")  # the window is known now: later commands go out with their request
         with pytest.raises(HubException):
             await repl.exec_many(["1/0", "print('second')", "print('third')"])
         assert hub.commands[-1] == "1/0"
