@@ -66,7 +66,7 @@ def _flash(args, name: str, port: str, steps: Steps) -> int:
     if current is None:
         steps.note("no openbricks firmware answered (a blank chip, or other firmware)")
     else:
-        steps.note(f"firmware {current.firmware} (hub {current.raw.get('hub_name') or 'unnamed'})")
+        steps.note(f"firmware {current.firmware}")
 
     tool = Esptool(port, echo=steps.note if args.verbose else None)
     steps.step("probe the chip")

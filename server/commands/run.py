@@ -1,0 +1,104 @@
+"""`openbricks run`: compile, stage as the button program, run it and stream its output.
+
+Ctrl-C sends the hub a stop (Ctrl-C over the REPL); the output keeps streaming until the hub reports
+the run as stopped, which is the confirmation. A second Ctrl-C leaves without waiting for it. The
+exit status is the program's outcome: 0 finished, 1 error, 130 stopped.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import signal
+import sys
+
+from openbricks_server.compile import code_program, read_program
+from openbricks_server.errors import EXIT_FAILED, EXIT_INTERRUPTED, EXIT_OK, CliError
+from openbricks_server.hub_session import with_hub
+from openbricks_server.staging import prepare, stage
+
+RUN_TIMEOUT_S = 24 * 3600.0  # a mission may run long; the link's own drop detection catches dead hubs
+OUTCOME_STATUS = {"finished": EXIT_OK, "error": EXIT_FAILED, "stopped": EXIT_INTERRUPTED}
+
+
+class TerminalOutput:
+    """The hub's output on our stdout as it arrives, with its CRLF line ends made plain newlines."""
+
+    def __init__(self, stream=None):
+        self.stream = stream or sys.stdout.buffer
+        self._held_cr = False
+
+    def __call__(self, data: bytes) -> None:
+        if self._held_cr:
+            data = b"\r" + data
+            self._held_cr = False
+        if data.endswith(b"\r"):
+            data, self._held_cr = data[:-1], True
+        self.stream.write(data.replace(b"\r\n", b"\n"))
+        self.stream.flush()
+
+
+class StopOnCtrlC:
+    """First Ctrl-C: ask the hub to stop and keep streaming; second: leave without the confirmation."""
+
+    def __init__(self, session, task: asyncio.Task):
+        self.session = session
+        self.task = task
+        self.requested = False
+        self.abandoned = False
+
+    def __call__(self) -> None:
+        if not self.requested:
+            self.requested = True
+            print(f"\n^C: stopping the program on {self.session.name} ...", file=sys.stderr, flush=True)
+            asyncio.ensure_future(self.session.repl.interrupt())
+            return
+        self.abandoned = True
+        self.task.cancel()
+
+
+def _link_event(event) -> None:
+    if event.kind == "dropped":
+        print(
+            f"\nlink to {event.hub} dropped ({event.detail}); reconnecting ...", file=sys.stderr, flush=True
+        )
+    else:
+        print(f"reconnected to {event.hub}; output continues", file=sys.stderr, flush=True)
+
+
+async def _talk(session, program):
+    print(f"{session.name}: firmware {session.info.firmware}", file=sys.stderr, flush=True)
+    path = await stage(session, program)
+    loop = asyncio.get_running_loop()
+    stopper = StopOnCtrlC(session, asyncio.current_task())
+    loop.add_signal_handler(signal.SIGINT, stopper)
+    try:
+        result = await session.repl.run(
+            path, on_output=TerminalOutput(), on_link_event=_link_event, timeout_s=RUN_TIMEOUT_S
+        )
+    except asyncio.CancelledError:
+        if stopper.abandoned:
+            raise CliError(
+                f"left without waiting for {session.name} to confirm the stop; check it with "
+                f"`openbricks stop -n {session.name}`",
+                EXIT_INTERRUPTED,
+            ) from None
+        raise
+    finally:
+        loop.remove_signal_handler(signal.SIGINT)
+    outcome = result.get("outcome", "error")
+    if outcome == "stopped":
+        print(
+            f"stopped: {session.name} confirmed the program ended (run {result.get('run')})", file=sys.stderr
+        )
+    elif outcome == "error":
+        print(f"the program ended with an error (run {result.get('run')})", file=sys.stderr)
+    return outcome
+
+
+def main(args) -> int:
+    program = code_program(args.code) if args.code is not None else read_program(args.script)
+    program = prepare(program)
+    outcome = asyncio.run(
+        with_hub(args.name, args.scan_timeout, lambda session: _talk(session, program), debug=args.debug)
+    )
+    return OUTCOME_STATUS.get(outcome, EXIT_FAILED)
