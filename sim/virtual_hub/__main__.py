@@ -10,6 +10,7 @@ and per-run time limits, never in the process that started it.
 """
 
 import argparse
+import faulthandler
 import os
 import re
 import resource
@@ -134,19 +135,22 @@ def main(argv=None):
         print(f"virtual hub {args.name}: {exc}", file=sys.stderr)
         return 2
     control = ControlServer(hub, os.path.join(directory, SOCKET_NAME)).start()
-    if args.pty:
-        announce.write(f"{port.path}\ncontrol {control.path}\n")
-        announce.flush()
     _limit_memory(args.memory_mb)
+
+    def ready():
+        if args.pty:
+            announce.write(f"{port.path}\ncontrol {control.path}\n")
+            announce.flush()
 
     def stop(_signum, _frame):
         # Not here: a signal handler runs on the main thread, possibly inside the gate's lock.
         threading.Thread(target=hub.shutdown, daemon=True).start()
 
+    faulthandler.register(signal.SIGUSR1)  # `kill -USR1 <pid>`: every thread's stack to stderr
     signal.signal(signal.SIGTERM, stop)
     signal.signal(signal.SIGINT, stop)
     try:
-        hub.serve()
+        hub.serve(on_ready=ready)
     finally:
         control.close()
     return 0

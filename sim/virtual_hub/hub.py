@@ -95,6 +95,7 @@ class VirtualHub:
         )
         self.run_active = False
         self.runs_started = 0
+        self._on_ready = None
 
     # -- the link --------------------------------------------------------------------------------
 
@@ -126,8 +127,13 @@ class VirtualHub:
 
     # -- serving ---------------------------------------------------------------------------------
 
-    def serve(self):
-        """Run the hub on this (main) thread until the link closes or shutdown() is called."""
+    def serve(self, on_ready=None):
+        """Run the hub on this (main) thread until the link closes or shutdown() is called.
+
+        `on_ready()` is called once the hub is up (boot.py has run, main.py is about to), which is
+        when a host should connect: a hub is up long before anyone plugs in its cable.
+        """
+        self._on_ready = on_ready
         sys.stdout = sys.stderr = self.stdout
         sys.stdin = self.stdin
         self.world.install()
@@ -237,6 +243,9 @@ class VirtualHub:
             text = self._error_text(outcome)
             if text:
                 errors.append(text)
+            if self._on_ready is not None:
+                ready, self._on_ready = self._on_ready, None
+                ready()
         self._finish("".join(errors) or None)
         return None
 

@@ -8,6 +8,7 @@ process-wide modules:
   MicroPython `os`, `import sys` a `sys` with MicroPython's `path` (['', '.frozen', '/lib']),
   `print_exception` and a hub `implementation`, and `import time` the simulator's MicroPython time
   with sleeps paced by the hub (see world.py);
+- `import deflate` gives MicroPython's deflate (the host compresses staged programs with it);
 - modules the hub has on its flash (a helper next to the program, a package under /lib) import
   from there, compiled under their hub paths; a `.mpy` is refused with the reason (this hub runs
   source);
@@ -26,6 +27,7 @@ import os
 import sys
 import types
 
+from . import deflate_module
 from .hub_fs import HubFS
 
 RUNTIME_PACKAGE = "openbricks"
@@ -272,6 +274,8 @@ class HubPython:
             return self.builtins
         if name == "time":
             return self._time
+        if name == "deflate":
+            return deflate_module
         return None
 
     def _import(self, name, globals=None, locals=None, fromlist=(), level=0):

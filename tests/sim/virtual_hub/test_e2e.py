@@ -1,0 +1,309 @@
+"""A virtual hub process driven through its pseudo-terminal: real mpremote, a raw host, the control
+socket. What a host sees is what it would see on a hub flashed with openbricks."""
+
+import base64
+import os
+import struct
+import time
+import zlib
+
+import pytest
+
+from .hubproc import Host, HubProcess, result_of
+
+pytestmark = pytest.mark.e2e
+
+DRIVE = """\
+import time
+from openbricks.drivers.st3032 import ST3032Motor
+
+left = ST3032Motor(1)
+right = ST3032Motor(2, invert=True)
+left.run_speed(360)
+right.run_speed(360)
+time.sleep_ms(1500)
+left.brake()
+right.brake()
+print("drove until", time.ticks_ms() > 0)
+"""
+
+ENDLESS = """\
+import time
+while True:
+    try:
+        time.sleep_ms(50)
+    except Exception:
+        pass
+"""
+
+
+@pytest.fixture
+def hub(tmp_path):
+    process = HubProcess(tmp_path / "RobotA", "RobotA", "--speed", "max", "--paste-window", "64")
+    try:
+        yield process
+    finally:
+        assert process.stop() == 0, process.stderr()
+
+
+@pytest.fixture
+def host(hub):
+    link = Host(hub.pty)
+    link.enter_raw()
+    try:
+        yield link
+    finally:
+        link.close()
+
+
+def wait_until(condition, timeout_s=20):
+    deadline = time.monotonic() + timeout_s
+    while not condition():
+        assert time.monotonic() < deadline, "condition not met in time"
+        time.sleep(0.05)
+
+
+def flash(hub, *parts):
+    return os.path.join(hub.directory, "flash", *parts)
+
+
+def test_mpremote_execs_copies_lists_and_runs_files(hub, tmp_path):
+    helper = tmp_path / "helper.py"
+    helper.write_text("def greet(name):\n    return 'hello ' + name\n")
+    program = tmp_path / "main_program.py"
+    program.write_text(
+        "import helper, os\nprint(helper.greet('hub'))\nprint(sorted(os.listdir('/')))\n"
+        "print(open('/helper.py').read().count('def'))\n"
+    )
+
+    done = hub.mpremote("exec", "print('sum', 20 + 22)")
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.decode().strip() == "sum 42"
+
+    done = hub.mpremote("fs", "cp", str(helper), ":helper.py", "+", "fs", "ls")
+    assert done.returncode == 0, done.stderr
+    listing = done.stdout.decode()
+    assert "helper.py" in listing and f"{helper.stat().st_size} helper.py" in listing
+    with open(flash(hub, "helper.py")) as f:
+        assert f.read() == helper.read_text()
+
+    done = hub.mpremote("run", str(program))
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.decode().splitlines() == ["hello hub", "['helper.py']", "1"]
+
+    done = hub.mpremote("fs", "cp", ":helper.py", str(tmp_path / "back.py"))
+    assert done.returncode == 0, done.stderr
+    assert (tmp_path / "back.py").read_text() == helper.read_text()
+
+    done = hub.mpremote("fs", "cat", ":missing.py")
+    assert done.returncode != 0
+    assert "No such file" in (done.stdout + done.stderr).decode()
+
+
+def test_mpremote_sees_a_micropython_traceback_for_a_failing_exec(hub):
+    done = hub.mpremote("exec", "def f():\n    raise ValueError('bad value')\nf()")
+    assert done.returncode == 1
+    text = done.stdout.decode()
+    assert 'File "<stdin>", line 3, in <module>' in text and "line 2, in f" in text
+    assert "ValueError: bad value" in text
+    assert "virtual_hub" not in text and "site-packages" not in text
+
+
+def test_raw_paste_flow_control_through_the_pty(host):
+    source = "total = 0\n" + "".join(f"total += {i}\n" for i in range(400)) + "print('total', total)\n"
+    assert len(source) > 10 * 64
+    host.write(b"\x05A\x01")
+    assert host.read_exactly(2) == b"R\x01"
+    (window,) = struct.unpack("<H", host.read_exactly(2))
+    assert window == 64
+    data = source.encode()
+    credit, sent = window, 0
+    while sent < len(data):
+        while credit == 0 or host.port.in_waiting:
+            byte = host.read_exactly(1)
+            assert byte == b"\x01", byte
+            credit += window
+        chunk = data[sent : sent + credit]
+        host.write(chunk)
+        sent += len(chunk)
+        credit -= len(chunk)
+    host.write(b"\x04")
+    tail = host.read_until(b"\x04")
+    assert tail.strip(b"\x01") == b"\x04"  # only window grants before the end-of-data ack
+    out = host.read_until(b"\x04")
+    err = host.read_until(b"\x04")
+    assert out == f"total {sum(range(400))}\r\n\x04".encode() and err == b"\x04"
+    assert host.read_exactly(1) == b">"
+
+
+def test_ctrl_c_stops_a_running_loop_and_the_hub_answers_after(host):
+    host.write(b"import time\nn = 0\nwhile True:\n    n += 1\n    time.sleep_ms(10)\n\x04")
+    assert host.read_exactly(2) == b"OK"
+    time.sleep(0.5)
+    host.write(b"\x03")
+    assert host.read_until(b"\x04") == b"\x04"
+    err = host.read_until(b"\x04").decode()
+    assert "KeyboardInterrupt" in err
+    host.read_until(b">")
+    out, err = host.exec_raw("print('alive', n > 0)")
+    assert out == "alive True\r\n" and not err
+
+
+def test_a_busy_loop_that_never_sleeps_is_interrupted_too(host):
+    host.write(b"x = 0\nwhile True:\n    x += 1\n\x04")
+    assert host.read_exactly(2) == b"OK"
+    time.sleep(0.3)
+    host.write(b"\x03")
+    host.read_until(b"\x04")
+    assert "KeyboardInterrupt" in host.read_until(b"\x04").decode()
+    host.read_until(b">")
+    assert host.exec_raw("print(x > 1000)") == ("True\r\n", "")
+
+
+def test_soft_reboot_forgets_the_repl_state_but_not_the_flash(host):
+    host.exec_raw("x = 5\nf = open('/kept.txt', 'w')\nf.write('kept')\nf.close()")
+    host.write(b"\x04")
+    assert host.read_until(b"raw REPL; CTRL-B to exit\r\n>") == (
+        b"OK\r\nMPY: soft reboot\r\nraw REPL; CTRL-B to exit\r\n>"
+    )
+    out, err = host.exec_raw("print(open('/kept.txt').read())\nprint(x)")
+    assert out == "kept\r\n" and "NameError" in err
+
+
+def test_host_calls_info_rtc_stage_run_and_read_back_the_run_log(hub, host):
+    info = host.call("h.info()")
+    assert info["ok"] and info["chip"] == "esp32s3" and info["firmware"].startswith("2.7.1")
+    assert info["accepts_mpy"] is False  # a virtual hub runs source, and says so
+    assert info["log_slots"] == 10 and info["compression"] == ["zlib"]
+    assert host.call("h.set_rtc(1767225600000)")["epoch_ms"] >= 1767225600000
+
+    payload = base64.b64encode(zlib.compress(DRIVE.encode())).decode()
+    staged = host.call(
+        f"h.stage({payload!r}, '/program.py', compression='zlib', size={len(DRIVE)}, "
+        f"crc32={zlib.crc32(DRIVE.encode())})"
+    )
+    assert staged == {
+        "ok": True,
+        "path": "/program.py",
+        "bytes": len(DRIVE),
+        "crc32": zlib.crc32(DRIVE.encode()),
+    }
+
+    out, err = host.exec_raw("import openbricks.host_calls as h\nh.run('/program.py')", timeout_s=60)
+    assert not err, err
+    assert "drove until True" in out
+    result = result_of(out)
+    assert result["outcome"] == "finished" and result["run"] == 0
+    assert hub.control("status")["pose"]["x_mm"] > 100  # the simulated robot really drove
+
+    assert host.call("h.runs()")["runs"][0]["index"] == 0
+    log = host.call("h.read_run(0)")["text"].splitlines()
+    assert log[1].split(" ", 1)[1].startswith("started: host run | firmware 2.7.1")
+    assert all(int(line.split(" ", 1)[0]) >= 1767225600000 for line in log)
+    assert log[-1].split(" ", 1)[1].startswith("stopped: finished after")
+    with open(flash(hub, "openbricks_logs", "slot_0.log")) as f:
+        assert "drove until True" in f.read()
+
+
+def test_every_run_starts_from_the_worlds_start_pose(hub, host):
+    host.call(f"h.stage({base64.b64encode(DRIVE.encode()).decode()!r}, '/program.py')")
+    poses = []
+    for _ in range(3):
+        out, err = host.exec_raw("import openbricks.host_calls as h\nh.run('/program.py')", timeout_s=60)
+        assert result_of(out)["outcome"] == "finished", err
+        poses.append(hub.control("status")["pose"])
+    # Without the reset the robot would end 1.5 s of driving further on at every run.
+    assert all(300 < pose["x_mm"] < 500 for pose in poses), poses
+    assert abs(poses[2]["x_mm"] - poses[1]["x_mm"]) < 5 and abs(poses[2]["y_mm"] - poses[1]["y_mm"]) < 5
+
+
+def test_upload_then_start_with_the_program_button(hub, host):
+    program = "import time\nprint('started by the button')\ntime.sleep_ms(200)\nprint('finished')\n"
+    host.call(f"h.stage({base64.b64encode(program.encode()).decode()!r}, '/program.py')")
+    # Hand the hub back to the launcher, as the host does before it disconnects.
+    host.write(b"import openbricks.host_calls as h\nh.idle()\x04")
+    assert host.read_exactly(2) == b"OK"
+    assert result_of(host.read_until(b"\n").decode())["idle"] is True
+    assert hub.control("click")["ok"]
+    output = host.read_until(b"finished\r\n", timeout_s=30).decode()
+    assert "started by the button" in output
+    wait_until(lambda: not hub.control("status")["running"])
+    # The next host session takes the hub back. A Ctrl-C that lands while the launcher is still
+    # tearing the run down counts as a late stop of that run (as on a hub), so a host repeats it
+    # until the idle() call ends.
+    for _ in range(5):
+        host.write(b"\x03")
+        try:
+            host.read_until(b"\x04", timeout_s=2)
+            break
+        except AssertionError:
+            continue
+    host.read_until(b"\x04")
+    host.read_until(b">")
+    (run,) = host.call("h.runs()")["runs"]
+    log = host.call(f"h.read_run({run['index']})")["text"]
+    assert "started: button press" in log and "stopped: finished after" in log
+
+
+def test_run_logs_and_the_hub_name_survive_a_restart_of_the_hub(tmp_path):
+    first = HubProcess(tmp_path / "RobotB", "RobotB", "--speed", "max")
+    try:
+        link = Host(first.pty)
+        link.enter_raw()
+        link.call(f"h.stage({base64.b64encode(b'print(7)').decode()!r}, '/program.py')")
+        assert link.call("h.run('/program.py')")["outcome"] == "finished"
+        link.close()
+    finally:
+        assert first.stop() == 0, first.stderr()
+    second = HubProcess(tmp_path / "RobotB", "RobotB", "--speed", "max")
+    try:
+        link = Host(second.pty)
+        link.enter_raw()
+        assert [run["index"] for run in link.call("h.runs()")["runs"]] == [0]
+        assert "7" in link.call("h.read_run(0)")["text"]
+        out, _ = link.exec_raw("from openbricks import bluetooth\nprint(bluetooth.hub_name())")
+        assert out == "RobotB\r\n"
+        link.close()
+    finally:
+        assert second.stop() == 0, second.stderr()
+
+
+def test_a_second_hub_on_the_same_directory_is_refused(hub):
+    import subprocess
+    import sys
+
+    from .hubproc import child_env
+
+    done = subprocess.run(
+        [sys.executable, "-m", "openbricks_sim.virtual_hub", "--name", "RobotA", "--dir", hub.directory],
+        capture_output=True,
+        timeout=60,
+        env=child_env(),
+        cwd=os.path.dirname(hub.directory),
+    )
+    assert done.returncode == 2 and b"already running" in done.stderr
+
+
+def test_a_run_past_its_time_limit_is_stopped_and_logged(tmp_path):
+    limited = HubProcess(tmp_path / "RobotC", "RobotC", "--speed", "max", "--run-limit-ms", "500")
+    try:
+        link = Host(limited.pty)
+        link.enter_raw()
+        link.call(f"h.stage({base64.b64encode(ENDLESS.encode()).decode()!r}, '/program.py')")
+        out, err = link.exec_raw("import openbricks.host_calls as h\nh.run('/program.py')")
+        assert result_of(out)["outcome"] == "error"
+        assert "RunLimitExceeded" in out
+        log = link.call("h.read_run(0)")["text"]
+        assert "stopped: RunLimitExceeded: the run passed the virtual hub's limit of 500 ms" in log
+        link.close()
+    finally:
+        assert limited.stop() == 0, limited.stderr()
+
+
+def test_machine_reset_reboots_into_the_friendly_repl(host):
+    host.write(b"import machine\nmachine.reset()\x04")
+    assert host.read_exactly(2) == b"OK"
+    time.sleep(0.5)
+    host.write(b"\r\x03")  # main.py runs again after a hard reset: interrupt it
+    banner = host.read_until(b">>> ").decode()
+    assert "virtual hub RobotA" in banner
