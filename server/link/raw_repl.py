@@ -52,9 +52,9 @@ PLAIN_RAW_CHUNK_BYTES = 256  # the stock hub's stdin ring holds 260: no flow con
 PLAIN_RAW_PACE_S = 0.01
 
 # Staging: how much base64 text one raw-paste command may carry. The hub's lexer holds the whole
-# string literal while it parses (about twice its size at peak), so this bounds the hub's RAM per
-# call; 12 KB keeps it near 30 KB on a hub with ~100 KB free, while a 16 KB program that compresses
-# to 0.7 still goes in a single call (one round trip of overhead instead of three).
+# string literal while it parses, then the str and the decoded bytes live next to it, so this bounds
+# the hub's RAM per call (~30 KB at 12 KB, on a hub with ~100 KB free). A .mpy up to ~14 KB
+# (compressing to 0.64) goes in one call; larger ones take one more command, pipelined.
 DEFAULT_CALL_PAYLOAD_CHARS = 12 * 1024
 # zlib window for staged payloads: the hub's inflater allocates 2**wbits bytes. 2 KB costs a few
 # percent of ratio against 32 KB on .mpy files and keeps the hub's allocation small.
@@ -616,7 +616,7 @@ class RawRepl:
         (raw-REPL input is text and a hub call takes data, not code); one `stage` call when the text
         fits `call_payload_chars`, else `stage_begin` + first chunk, middle chunks, last chunk +
         `stage_end`, pipelined. Upload speed is min(link, 2 windows per round trip): with the
-        stock 128-byte window a BLE link at 7.5 ms gives ~17 KB/s, with 1 KB windows the link
+        stock 128-byte window a BLE link at 7.5 ms gives ~17 KB/s, with 2 KB windows the link
         itself is the limit (benchmarks/link_upload.py measures both).
 
         `compress=None` compresses when `info()` said the hub can inflate (call `info()` first).
