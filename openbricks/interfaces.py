@@ -14,6 +14,8 @@ import time
 
 from openbricks.parameters import Stop, then_name
 
+_EBUSY = 16  # errno EBUSY, as MicroPython's OSError carries it
+
 
 def _unsupported(obj, method, hint=""):
     message = "%s does not support %s()" % (type(obj).__name__, method)
@@ -199,6 +201,47 @@ class IMU:
     def acceleration(self):
         """(ax, ay, az) in m/s^2."""
         raise _unsupported(self, "acceleration")
+
+
+class HeadingFrame:
+    """The claim a drive base takes on an IMU's heading frame while it steers by it.
+
+    While claimed, reset_heading() must refuse (Pybricks: "can't reset heading while gyro in use"):
+    the drive base's controller holds a target in the current frame, and moving the frame under it
+    makes the next move veer. The drive base's own reset() re-zeroes both together. A driver mixes
+    this in, names itself in HEADING_SOURCE, and calls _check_heading_free() in reset_heading().
+    """
+
+    HEADING_SOURCE = "IMU"
+    _steering_owner = None
+
+    def lock_heading(self, owner):
+        """Called by a drive base when it starts steering by this IMU (use_gyro(True))."""
+        if self._steering_owner is not None and self._steering_owner is not owner:
+            raise OSError(
+                _EBUSY,
+                "this %s already steers a %s; one IMU can hold one drive base's heading"
+                % (self.HEADING_SOURCE, type(self._steering_owner).__name__),
+            )
+        self._steering_owner = owner
+
+    def unlock_heading(self, owner):
+        """Release the frame taken by lock_heading(owner) (use_gyro(False), or around db.reset())."""
+        if self._steering_owner is owner:
+            self._steering_owner = None
+
+    def heading_locked_by(self):
+        """The drive base steering by this IMU, or None."""
+        return self._steering_owner
+
+    def _check_heading_free(self):
+        if self._steering_owner is not None:
+            raise OSError(
+                _EBUSY,
+                "can't reset heading while gyro in use: %s steers by this %s; use its reset() "
+                "(re-zeroes the drive base and this IMU together) or use_gyro(False) first"
+                % (type(self._steering_owner).__name__, self.HEADING_SOURCE),
+            )
 
 
 class ColorSensor:

@@ -18,7 +18,7 @@ import time
 
 from micropython import const
 
-from openbricks.interfaces import IMU
+from openbricks.interfaces import IMU, HeadingFrame
 
 _DEFAULT_ADDR = const(0x28)
 
@@ -43,18 +43,18 @@ _BOOT_MS = const(850)  # datasheet: 650 ms power-on to configuration mode, plus 
 _TO_CONFIG_MS = const(20)  # any mode -> CONFIG takes 19 ms
 _TO_FUSION_MS = const(10)  # CONFIG -> any operating mode takes 7 ms
 
-_EBUSY = const(16)
 _ENODEV = const(19)
 
 
-class BNO055(IMU):
+class BNO055(HeadingFrame, IMU):
+    HEADING_SOURCE = "BNO055"
+
     """BNO055 at `address` (0x28, or 0x29 with ADR strapped high) on a machine.I2C or mux channel."""
 
     def __init__(self, i2c, address=_DEFAULT_ADDR):
         self._i2c = i2c
         self._address = address
         self._buf = bytearray(6)
-        self._steering_owner = None
         self._wait_for_chip()
         self._write(_OPR_MODE, _MODE_CONFIG)
         time.sleep_ms(_TO_CONFIG_MS)
@@ -113,13 +113,7 @@ class BNO055(IMU):
         Refused while a drive base steers by this IMU: its controller holds a target in the
         current frame, and moving the frame under it makes the next move veer.
         """
-        if self._steering_owner is not None:
-            raise OSError(
-                _EBUSY,
-                "can't reset heading while gyro in use: %s steers by this BNO055; use its reset() "
-                "(re-zeroes the drive base and this IMU together) or use_gyro(False) first"
-                % type(self._steering_owner).__name__,
-            )
+        self._check_heading_free()
         self._offset = self._raw_heading() - angle
 
     def euler(self):
@@ -134,28 +128,6 @@ class BNO055(IMU):
     def acceleration(self):
         """(x, y, z) acceleration in m/s^2, in the chip's frame."""
         return self._vector(_ACC_DATA, 100)
-
-    # -- the drive base's claim on the heading frame ---------------------------------------------
-
-    def lock_heading(self, owner):
-        """Called by a drive base when it starts steering by this IMU (use_gyro(True)):
-        reset_heading() refuses until unlock_heading(owner)."""
-        if self._steering_owner is not None and self._steering_owner is not owner:
-            raise OSError(
-                _EBUSY,
-                "this BNO055 already steers a %s; one IMU can hold one drive base's heading"
-                % type(self._steering_owner).__name__,
-            )
-        self._steering_owner = owner
-
-    def unlock_heading(self, owner):
-        """Release the frame taken by lock_heading(owner) (use_gyro(False), or around db.reset())."""
-        if self._steering_owner is owner:
-            self._steering_owner = None
-
-    def heading_locked_by(self):
-        """The drive base steering by this IMU, or None."""
-        return self._steering_owner
 
     def __repr__(self):
         return "BNO055(address=0x%02X)" % self._address

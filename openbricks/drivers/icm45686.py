@@ -24,6 +24,7 @@ from machine import SPI, Pin, Timer
 from micropython import const
 
 from openbricks import pins
+from openbricks.interfaces import HeadingFrame
 
 _ACCEL_DATA = const(0x00)
 _PWR_MGMT0 = const(0x10)
@@ -58,7 +59,9 @@ _MAX_BIAS_DPS = 5.0
 _MAX_GAP_US = const(100_000)
 
 
-class ICM45686:
+class ICM45686(HeadingFrame):
+    HEADING_SOURCE = "ICM-45686"
+
     """ICM-45686 on SPI pins `sck`, `mosi`, `miso`, `cs` (GPIO numbers).
 
     `scale` turns gyro Z (counter-clockwise-positive about the chip's up axis)
@@ -96,7 +99,6 @@ class ICM45686:
         self._reads_ok = 0
         self._read_errors = 0
         self._configured = False
-        self._steering_owner = None
         self._clock_us = 0
         self._last_ticks_us = None
         self._configure()
@@ -191,13 +193,7 @@ class ICM45686:
         Refused while a drive base steers by this gyro: its controller holds a target in the
         current frame, and moving the frame under it makes the next move veer.
         """
-        if self._steering_owner is not None:
-            raise OSError(
-                _EBUSY,
-                "can't reset heading while gyro in use: %s steers by this ICM-45686; use its reset() "
-                "(re-zeroes the drive base and this IMU together) or use_gyro(False) first"
-                % type(self._steering_owner).__name__,
-            )
+        self._check_heading_free()
         self._yaw.reset_heading(angle)
 
     def gyro(self):
@@ -238,28 +234,6 @@ class ICM45686:
             self._timer = None
         for pin in self._pins:
             pins.release(pin, self)
-
-    # -- the drive base's claim on the heading frame ---------------------------------------------
-
-    def lock_heading(self, owner):
-        """Called by a drive base when it starts steering by this gyro (use_gyro(True)):
-        reset_heading() refuses until unlock_heading(owner)."""
-        if self._steering_owner is not None and self._steering_owner is not owner:
-            raise OSError(
-                _EBUSY,
-                "this ICM-45686 already steers a %s; one gyro can hold one drive base's heading"
-                % type(self._steering_owner).__name__,
-            )
-        self._steering_owner = owner
-
-    def unlock_heading(self, owner):
-        """Release the frame taken by lock_heading(owner) (use_gyro(False), or around db.reset())."""
-        if self._steering_owner is owner:
-            self._steering_owner = None
-
-    def heading_locked_by(self):
-        """The drive base steering by this gyro, or None."""
-        return self._steering_owner
 
     def _seed_from_nvs(self):
         try:
