@@ -47,9 +47,9 @@ _ENODEV = const(19)
 
 
 class BNO055(HeadingFrame, IMU):
-    HEADING_SOURCE = "BNO055"
-
     """BNO055 at `address` (0x28, or 0x29 with ADR strapped high) on a machine.I2C or mux channel."""
+
+    HEADING_SOURCE = "BNO055"
 
     def __init__(self, i2c, address=_DEFAULT_ADDR):
         self._i2c = i2c

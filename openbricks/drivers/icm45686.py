@@ -60,14 +60,14 @@ _MAX_GAP_US = const(100_000)
 
 
 class ICM45686(HeadingFrame):
-    HEADING_SOURCE = "ICM-45686"
-
     """ICM-45686 on SPI pins `sck`, `mosi`, `miso`, `cs` (GPIO numbers).
 
     `scale` turns gyro Z (counter-clockwise-positive about the chip's up axis)
     into clockwise-positive heading: -1.0 for a face-up breakout, +1.0 face
     down, and its magnitude can carry a measured gain correction.
     """
+
+    HEADING_SOURCE = "ICM-45686"
 
     def __init__(
         self, sck, mosi, miso, cs, hz=8_000_000, mode=3, scale=-1.0, timer_id=3, sample_hz=200, spi_id=1
