@@ -40,6 +40,9 @@ NVS_FILE = "nvs.json"
 LOCK_FILE = "hub.lock"
 
 
+_END_OF_LINK = object()  # queued by the reader when the link ends
+
+
 class HubShutdown(BaseException):
     """The virtual hub process is stopping: ends whatever hub code runs (a run is logged as such)."""
 
@@ -96,6 +99,7 @@ class VirtualHub:
         self.run_active = False
         self.runs_started = 0
         self._on_ready = None
+        self._link_started = False
 
     # -- the link --------------------------------------------------------------------------------
 
@@ -115,7 +119,16 @@ class VirtualHub:
             with self._state_lock:
                 self._dispatch(self.protocol.feed(data))
             self.stdin.notify()
-        self.shutdown()
+        # The host is gone for good (stdio closed): finish what it asked for, then stop.
+        self._events.put(_END_OF_LINK)
+
+    def _start_link(self):
+        """The hub is up: listen to the link, and tell whoever waits for us (once)."""
+        self._link_started = True
+        threading.Thread(target=self._reader, name="virtual-hub-link", daemon=True).start()
+        if self._on_ready is not None:
+            ready, self._on_ready = self._on_ready, None
+            ready()
 
     def _dispatch(self, events):
         """Route protocol events (call with the state lock held)."""
@@ -138,14 +151,17 @@ class VirtualHub:
         sys.stdin = self.stdin
         self.world.install()
         self.python.install()
-        reader = threading.Thread(target=self._reader, name="virtual-hub-link", daemon=True)
-        reader.start()
         try:
             self._reset(hard=True)
             while not self._closing.is_set():
                 try:
                     event = self._events.get(timeout=0.25)
                 except queue.Empty:
+                    continue
+                if event is _END_OF_LINK:
+                    if self._events.empty():
+                        break
+                    self._events.put(event)  # code the last bytes asked for is still queued
                     continue
                 if isinstance(event, Execute):
                     self._execute(event)
@@ -243,9 +259,8 @@ class VirtualHub:
             text = self._error_text(outcome)
             if text:
                 errors.append(text)
-            if self._on_ready is not None:
-                ready, self._on_ready = self._on_ready, None
-                ready()
+            if filename == "boot.py" and not self._link_started:
+                self._start_link()
         self._finish("".join(errors) or None)
         return None
 

@@ -307,3 +307,57 @@ def test_machine_reset_reboots_into_the_friendly_repl(host):
     host.write(b"\r\x03")  # main.py runs again after a hard reset: interrupt it
     banner = host.read_until(b">>> ").decode()
     assert "virtual hub RobotA" in banner
+
+
+def test_stopping_the_hub_mid_run_ends_the_run_cleanly_and_logs_it(tmp_path):
+    running = HubProcess(tmp_path / "RobotD", "RobotD")
+    try:
+        link = Host(running.pty)
+        link.enter_raw()
+        program = "import time\nprint('going')\nwhile True:\n    time.sleep_ms(100)\n"
+        link.call(f"h.stage({base64.b64encode(program.encode()).decode()!r}, '/program.py')")
+        link.write(b"import openbricks.host_calls as h\nh.idle()\x04")
+        link.read_until(b'"idle": true}')
+        running.control("click")
+        link.read_until(b"going\r\n", timeout_s=30)
+        time.sleep(0.3)
+        with open(f"/proc/{running.proc.pid}/status") as status:
+            peak_kb = int(status.read().split("VmHWM:")[1].split()[0])
+        assert peak_kb < 120 * 1024, "the product's memory bar for a virtual-hub process"
+        link.close()
+    finally:
+        assert running.stop() == 0, running.stderr()
+    with open(tmp_path / "RobotD" / "flash" / "openbricks_logs" / "slot_0.log") as f:
+        last = f.read().splitlines()[-1]
+    assert last.split(" ", 1)[1].startswith("stopped: HubShutdown: the virtual hub is shutting down after")
+
+
+def test_a_hub_on_stdio_speaks_the_same_protocol(tmp_path):
+    import subprocess
+    import sys
+
+    from .hubproc import child_env
+
+    proc = subprocess.Popen(
+        [
+            sys.executable,
+            "-m",
+            "openbricks_sim.virtual_hub",
+            "--name",
+            "Piped",
+            "--dir",
+            str(tmp_path / "Piped"),
+        ],
+        stdin=subprocess.PIPE,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        env=child_env(),
+        cwd=tmp_path,
+    )
+    try:
+        out, err = proc.communicate(b"\r\x03\r\x01print('piped', 6 * 7)\x04", timeout=60)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        raise
+    assert proc.returncode == 0, err.decode()
+    assert b"raw REPL; CTRL-B to exit\r\n>OKpiped 42\r\n\x04\x04>" in out
