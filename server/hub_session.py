@@ -102,11 +102,12 @@ def _tap(link, listener: Callable[[bytes], None]) -> None:
     link._received = tapped
 
 
-def translate(name: str, exc: LinkError) -> CliError:
-    """A link failure as the message a user acts on."""
-    if isinstance(exc, LinkDropped):
+def translate(name: str, exc: LinkError, dropped: bool = False) -> CliError:
+    """A link failure as the message a user acts on; `dropped`: the link had dropped before it."""
+    if isinstance(exc, LinkDropped) or dropped:
+        reason = exc.reason if isinstance(exc, LinkDropped) else f"reconnecting failed: {exc}"
         return LinkLostError(
-            f"the link to {name} was lost ({exc.reason}); what arrived before is shown above. If a program "
+            f"the link to {name} was lost ({reason}); what arrived before is shown above. If a program "
             f"was running it may still run: `openbricks log -n {name}` shows its output later"
         )
     if isinstance(exc, LinkTimeout):
@@ -151,7 +152,7 @@ async def with_hub(
                 await _hand_back(session)
             return result
         except LinkError as exc:
-            raise translate(name, exc) from None
+            raise translate(name, exc, dropped=link.dropped_at is not None) from None
         finally:
             await link.close()
 

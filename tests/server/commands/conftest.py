@@ -1,0 +1,144 @@
+"""End-to-end fixtures: real virtual hub processes, and the `openbricks` CLI run as a user runs it.
+
+Every hub and every CLI call has a timeout, and hubs are terminated (killed if they linger) when the
+test module ends, so a hung hub fails a test instead of stalling the suite.
+"""
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+HUB_START_TIMEOUT_S = 60
+CLI_TIMEOUT_S = 90
+
+
+class HubProcess:
+    def __init__(self, name: str, data_dir: Path, *extra: str):
+        self.name = name
+        self.data_dir = data_dir
+        self.env = dict(os.environ, OPENBRICKS_DATA_DIR=str(data_dir))
+        self.process = subprocess.Popen(
+            [
+                sys.executable,
+                "-m",
+                "openbricks_sim.virtual_hub",
+                "--name",
+                name,
+                "--pty",
+                "--speed",
+                "max",
+                *extra,
+            ],
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            env=self.env,
+            text=True,
+        )
+        self.pty = self._first_line()
+        self.directory = data_dir / "virtual-hubs" / name
+
+    def _first_line(self) -> str:
+        import selectors
+
+        selector = selectors.DefaultSelector()
+        selector.register(self.process.stdout, selectors.EVENT_READ)
+        if not selector.select(timeout=HUB_START_TIMEOUT_S):
+            self.stop()
+            raise RuntimeError(f"virtual hub {self.name} did not start: {self.process.stderr.read()}")
+        line = self.process.stdout.readline().strip()
+        if not line.startswith("/dev/"):
+            self.stop()
+            raise RuntimeError(f"virtual hub {self.name} failed: {line} {self.process.stderr.read()}")
+        self.process.stdout.readline()  # "control <path>"
+        return line
+
+    def control(self, op: str) -> dict:
+        from openbricks_server.link.discovery import control
+
+        return control(self.directory / "control.sock", {"op": op})
+
+    def press_button(self, until: str = "finished", timeout_s: float = 30.0) -> None:
+        """Click the program button and wait until the run it starts has begun (until="started") or
+        also ended (until="finished"). Until then a host connecting would interrupt the launcher's
+        idle loop before it picks the press up."""
+        before = self.control("status")["runs_started"]
+        self.control("click")
+        deadline = time.monotonic() + timeout_s
+        while time.monotonic() < deadline:
+            status = self.control("status")
+            if status["runs_started"] > before and (until == "started" or not status["running"]):
+                return
+            time.sleep(0.05)
+        raise AssertionError(f"the button press on {self.name} did not {until[:-2]} a run in {timeout_s} s")
+
+    def nvs_blob(self, namespace: str, key: str) -> bytes | None:
+        """A committed NVS blob of the hub, read from the file the virtual hub keeps it in."""
+        import base64
+
+        namespaces = json.loads((self.directory / "nvs.json").read_text())["namespaces"]
+        item = namespaces.get(namespace, {}).get(key)
+        return None if item is None else base64.b64decode(item["blob"])
+
+    def flash_file(self, path: str) -> bytes:
+        return (self.directory / "flash" / path.lstrip("/")).read_bytes()
+
+    def stop(self) -> None:
+        if self.process.poll() is None:
+            self.process.terminate()
+            try:
+                self.process.wait(timeout=5)
+            except subprocess.TimeoutExpired:
+                self.process.kill()
+                self.process.wait(timeout=5)
+        for stream in (self.process.stdout, self.process.stderr):
+            stream.close()
+
+
+def cli(env: dict, *args: str, timeout: float = CLI_TIMEOUT_S, cwd=None) -> subprocess.CompletedProcess:
+    return subprocess.run(
+        [sys.executable, "-m", "openbricks_server.cli", *args],
+        capture_output=True,
+        text=True,
+        env=env,
+        timeout=timeout,
+        cwd=cwd,
+    )
+
+
+def interrupt_when(process: subprocess.Popen, seen: str, timeout_s: float = 60) -> str:
+    """Read the CLI's stdout until `seen` appears, then Ctrl-C it; returns what was read."""
+    got = ""
+    deadline = time.monotonic() + timeout_s
+    while seen not in got:
+        if time.monotonic() > deadline:
+            process.kill()
+            raise AssertionError(f"never saw {seen!r}; got {got!r}")
+        line = process.stdout.readline()
+        if not line and process.poll() is not None:
+            raise AssertionError(f"the CLI ended before {seen!r}: {got!r} {process.stderr.read()}")
+        got += line
+    process.send_signal(signal.SIGINT)
+    return got
+
+
+@pytest.fixture(scope="module")
+def data_dir(tmp_path_factory):
+    return tmp_path_factory.mktemp("openbricks-data")
+
+
+@pytest.fixture(scope="module")
+def hub(data_dir):
+    process = HubProcess("RobotA", data_dir)
+    yield process
+    process.stop()
+
+
+@pytest.fixture
+def env(hub):
+    return hub.env

@@ -1,0 +1,27 @@
+"""servo-id through a hub: the virtual hub's simulated bus carries the robot's two ST-3032 servos."""
+
+import pytest
+
+from .conftest import cli
+
+pytestmark = pytest.mark.e2e
+
+
+def test_scan_and_re_id_through_the_hub(env):
+    scan = cli(env, "servo-id", "-n", "RobotA", "--scan")
+    assert scan.returncode == 0, scan.stderr
+    assert scan.stdout.strip() == "servo ids on RobotA's servo bus: 1, 2"
+    guess = cli(env, "servo-id", "-n", "RobotA", "7")
+    assert guess.returncode == 1 and "pass old_id= to say which one" in guess.stderr
+    taken = cli(env, "servo-id", "-n", "RobotA", "1", "--old-id", "2")
+    assert taken.returncode == 1 and "id 1 is already taken" in taken.stderr
+    done = cli(env, "servo-id", "-n", "RobotA", "7", "--old-id", "2")
+    assert done.returncode == 0, done.stderr
+    assert "servo 2 is now id 7 (read back from the servo); ids on the bus: 1, 7" in done.stdout
+    assert cli(env, "servo-id", "-n", "RobotA", "--scan").stdout.strip().endswith("1, 7")
+
+
+def test_bad_ids_are_refused_before_connecting(env):
+    done = cli(env, "servo-id", "-n", "RobotA", "300")
+    assert done.returncode == 1 and "servo bus ids are 0..253" in done.stderr
+    assert cli(env, "servo-id", "-n", "RobotA").returncode == 2  # neither NEW_ID nor --scan
