@@ -1,6 +1,7 @@
 """Quadrature encoders: counts of A/B edges (x4 decoding), read by the motor drivers.
 
-Two ways to count, one interface (`count()`, `reset(count)`, `close()`):
+Two ways to count, one interface (`count()`, `reset(count)`, `close()`); `make_encoder()` picks the
+peripheral when the runtime has it and the interrupt decoder otherwise:
 
 - QuadratureEncoder decodes in a pin-change interrupt. Fine for Hall
   encoders behind a gearbox (a JGB37-520 at 300 RPM is ~6.6 k edges/s), but
@@ -8,7 +9,11 @@ Two ways to count, one interface (`count()`, `reset(count)`, `close()`):
 - PCNTEncoder lets the ESP32's pulse-counter peripheral count (machine.Encoder),
   with its glitch filter, for high-resolution GMR encoders (MG370) whose edge
   rate no interrupt handler could keep up with. One PCNT unit per encoder
-  (ESP32 has 8, ESP32-S3 has 4).
+  (ESP32 has 8, ESP32-S3 has 4). The default wherever machine.Encoder exists:
+  it costs no CPU per edge and misses none, and the simulator counts encoders
+  this way too (it has no per-edge pin interrupts).
+
+Both count up for A leading B, so a motor keeps its direction whichever counts.
 """
 
 from openbricks import pins
@@ -21,6 +26,37 @@ _MISSED = (3, 6, 9, 12)  # transitions where both channels changed
 
 # PCNT filter: the manual counts it in 80 MHz APB cycles (1023 ~ 12.8 us); machine.Encoder takes ns.
 _NS_PER_APB_CYCLE = 12.5
+# PCNT units (machine.Encoder ids) per chip; off-chip (simulator, tests) nothing bounds them.
+_PCNT_UNITS = {pins.ESP32: 8, pins.ESP32S3: 4}
+
+
+def make_encoder(pin_a, pin_b, invert=False, name="encoder", unit=None, filter=1023):
+    """The encoder counter this runtime does best: a PCNT unit, else the pin-interrupt decoder.
+
+    `unit` is the PCNT unit to count on; None takes the lowest free one, and when every unit of the
+    chip is taken the encoder counts in a pin interrupt instead. A runtime without machine.Encoder
+    (a MicroPython port other than the ESP32's) always counts in a pin interrupt.
+    """
+    import machine
+
+    if getattr(machine, "Encoder", None) is not None:
+        if unit is None:
+            unit = free_pcnt_unit()
+        if unit is not None:
+            return PCNTEncoder(pin_a, pin_b, unit=unit, filter=filter, invert=invert, name=name)
+    return QuadratureEncoder(pin_a, pin_b, invert=invert, name=name)
+
+
+def free_pcnt_unit():
+    """The lowest PCNT unit no live encoder counts on, or None when the chip has none left."""
+    limit = _PCNT_UNITS.get(pins.chip())
+    unit = 0
+    while limit is None or unit < limit:
+        holder = PCNTEncoder._units.get(unit)
+        if holder is None or not holder._live():
+            return unit
+        unit += 1
+    return None
 
 
 class QuadratureEncoder:

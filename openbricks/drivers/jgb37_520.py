@@ -2,6 +2,9 @@
 
 Six wires: the two motor leads into the bridge, encoder Vcc/GND and channels
 A/B. The default 1320 counts per output turn is 11 pulses x 4 edges x 1:30.
+The encoder is counted by a free PCNT unit where the runtime has machine.Encoder
+(the ESP32 port, and the simulator), else in a pin interrupt, which keeps up
+with this motor's few thousand edges a second.
 
 The closed loop runs on the native servo core (`_openbricks_native.Servo`),
 ticked by `motor_process` at 1 kHz: this class only builds the bridge and the
@@ -12,7 +15,7 @@ angle work on a build without the native core; closed-loop ones need it.
 
 import time
 
-from openbricks.drivers.encoder import QuadratureEncoder
+from openbricks.drivers.encoder import make_encoder
 from openbricks.drivers.l298n import L298NMotor
 from openbricks.interfaces import Motor
 from openbricks.parameters import Stop, then_name
@@ -32,7 +35,8 @@ class JGB37Motor(Motor):
     `invert` flips the bridge and the encoder together (a motor mounted
     mirror-image); `encoder_invert` flips only the encoder (one that counts
     down while the motor turns forward). `no_load_dps` is the output speed at
-    full duty, which the feed-forward is scaled by.
+    full duty, which the feed-forward is scaled by. `pcnt_unit` pins the
+    encoder to one PCNT unit; None (the default) takes the lowest free one.
     """
 
     def __init__(
@@ -47,6 +51,7 @@ class JGB37Motor(Motor):
         encoder_invert=False,
         kp=_DEFAULT_KP,
         no_load_dps=_DEFAULT_NO_LOAD_DPS,
+        pcnt_unit=None,
     ):
         if counts_per_output_rev <= 0 or no_load_dps <= 0:
             raise ValueError(
@@ -56,6 +61,7 @@ class JGB37Motor(Motor):
         self.invert = bool(invert)
         self.counts_per_output_rev = counts_per_output_rev
         self.no_load_dps = no_load_dps
+        self.pcnt_unit = pcnt_unit
         self._deg_per_count = 360.0 / counts_per_output_rev
         self._offset_deg = 0.0
         self._bridge = L298NMotor(in1, in2, pwm, invert=invert)
@@ -67,7 +73,9 @@ class JGB37Motor(Motor):
         self._servo = self._make_servo(kp)
 
     def _make_encoder(self, pin_a, pin_b, invert):
-        return QuadratureEncoder(pin_a, pin_b, invert=invert, name="%s encoder" % type(self).__name__)
+        return make_encoder(
+            pin_a, pin_b, invert=invert, name="%s encoder" % type(self).__name__, unit=self.pcnt_unit
+        )
 
     def _make_servo(self, kp):
         try:

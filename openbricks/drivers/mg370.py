@@ -3,11 +3,13 @@
 The GMR encoder gives 500 pulses per motor turn; x4 edges through a 1:34.014
 gearbox is ~68028 counts per output turn. That edge rate is far beyond what
 a pin interrupt can service, so the ESP32's pulse-counter peripheral counts
-it (one PCNT unit per motor). Everything else, bridge and native servo
-core, is the JGB37-520's.
+it (one PCNT unit per motor, chosen by the caller). On a runtime without
+machine.Encoder the encoder falls back to the pin-interrupt decoder, which
+only keeps up at low shaft speeds (its `missed` count says when it did not).
+Everything else, bridge and native servo core, is the JGB37-520's.
 """
 
-from openbricks.drivers.encoder import PCNTEncoder
+from openbricks.drivers.encoder import make_encoder
 from openbricks.drivers.jgb37_520 import _DEFAULT_KP, JGB37Motor
 
 _DEFAULT_CPR = int(500 * 4 * 34.014)
@@ -34,7 +36,6 @@ class MG370Motor(JGB37Motor):
         kp=_DEFAULT_KP,
         no_load_dps=_DEFAULT_NO_LOAD_DPS,
     ):
-        self.pcnt_unit = pcnt_unit
         self.pcnt_filter = pcnt_filter
         JGB37Motor.__init__(
             self,
@@ -48,9 +49,10 @@ class MG370Motor(JGB37Motor):
             encoder_invert,
             kp,
             no_load_dps,
+            pcnt_unit,
         )
 
     def _make_encoder(self, pin_a, pin_b, invert):
-        return PCNTEncoder(
-            pin_a, pin_b, unit=self.pcnt_unit, filter=self.pcnt_filter, invert=invert, name="MG370 encoder"
+        return make_encoder(
+            pin_a, pin_b, invert=invert, name="MG370 encoder", unit=self.pcnt_unit, filter=self.pcnt_filter
         )

@@ -4,7 +4,7 @@ import machine
 
 from fakes.expect import raises
 from openbricks import pins
-from openbricks.drivers.encoder import PCNTEncoder, QuadratureEncoder
+from openbricks.drivers.encoder import PCNTEncoder, QuadratureEncoder, make_encoder
 
 # A leading B, one full cycle from rest with both lines pulled up.
 _FORWARD = ((0, 1), (0, 0), (1, 0), (1, 1))
@@ -95,3 +95,74 @@ def test_pcnt_filter_range_is_checked():
     pins.reset_claims()
     with raises(ValueError, "0..1023 APB cycles"):
         PCNTEncoder(7, 8, unit=3, filter=5000)
+
+
+def _without_machine_encoder(build):
+    """`build()` on a runtime whose machine module has no Encoder (a port without PCNT)."""
+    saved = machine.Encoder
+    machine.Encoder = None
+    try:
+        return build()
+    finally:
+        machine.Encoder = saved
+
+
+def _idle_high(*pin_ids):
+    """Encoder lines at rest on their pull-ups, as _spin() expects them."""
+    for pin_id in pin_ids:
+        machine.board.input_levels[pin_id] = 1
+
+
+def test_the_pcnt_peripheral_and_the_interrupt_decoder_count_the_same_way():
+    pins.reset_claims()
+    _idle_high(7, 8, 12, 13)
+    pcnt = PCNTEncoder(7, 8, unit=0)
+    irq = QuadratureEncoder(12, 13)
+    _spin(5)
+    _spin(5, a=12, b=13)
+    assert pcnt.count() == irq.count() == 20
+    _spin(-2)
+    _spin(-2, a=12, b=13)
+    assert pcnt.count() == irq.count() == 12
+
+
+def test_make_encoder_counts_on_the_lowest_free_pcnt_unit():
+    pins.reset_claims()
+    PCNTEncoder(1, 2, unit=0)
+    PCNTEncoder(3, 4, unit=2)
+    _idle_high(7, 8)
+    enc = make_encoder(7, 8, name="left encoder")
+    assert isinstance(enc, PCNTEncoder) and enc.unit == 1
+    assert machine.board.encoders[1].phase_a == 7
+    _spin(3)
+    assert enc.count() == 12
+    assert make_encoder(12, 13).unit == 3
+
+
+def test_make_encoder_honours_a_given_unit_and_its_clash():
+    pins.reset_claims()
+    assert make_encoder(7, 8, unit=5).unit == 5
+    with raises(ValueError, "PCNT unit 5 already counts the encoder on GPIO 7/8"):
+        make_encoder(12, 13, unit=5)
+
+
+def test_without_machine_encoder_the_pins_are_decoded_in_an_interrupt():
+    pins.reset_claims()
+    enc = _without_machine_encoder(lambda: make_encoder(7, 8, invert=True, unit=1))
+    assert isinstance(enc, QuadratureEncoder)
+    assert 1 not in machine.board.encoders
+    _spin(2)
+    assert enc.count() == -8
+
+
+def test_when_the_chips_pcnt_units_are_all_taken_the_next_encoder_uses_interrupts():
+    pins.reset_claims()
+    pins.set_chip("esp32s3")
+    try:
+        taken = [make_encoder(a, a + 1) for a in (1, 3, 5, 7)]
+        assert [enc.unit for enc in taken] == [0, 1, 2, 3]
+        assert isinstance(make_encoder(9, 10), QuadratureEncoder)
+        taken[2].close()
+        assert make_encoder(11, 12).unit == 2
+    finally:
+        pins.set_chip(None)

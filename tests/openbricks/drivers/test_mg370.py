@@ -51,3 +51,20 @@ def test_pcnt_filter_reaches_the_peripheral():
     _fresh()
     MG370Motor(in1=1, in2=2, pwm=17, encoder_a=7, encoder_b=8, pcnt_unit=2, pcnt_filter=400)
     assert machine.board.encoders[2].filter_ns == 5000
+
+
+def test_without_machine_encoder_it_falls_back_to_the_interrupt_decoder():
+    from fakes.dc_motor import QuadratureLines
+
+    _fresh()
+    lines = QuadratureLines(7, 8)
+    saved = machine.Encoder
+    machine.Encoder = None
+    try:
+        m = MG370Motor(in1=1, in2=2, pwm=17, encoder_a=7, encoder_b=8)
+    finally:
+        machine.Encoder = saved
+    assert not machine.board.encoders
+    lines.move(1000)
+    assert approx(m.angle(), 1000 * 360 / 68028, 1e-6)
+    assert m._encoder.missed == 0

@@ -43,6 +43,10 @@ class _Board:
                 not rising and pin._irq_trigger & Pin.IRQ_FALLING
             ):
                 pin._irq_handler(pin)
+        if old != self.input_levels[pin_id]:
+            for encoder in self.encoders.values():
+                if pin_id in (encoder.phase_a, encoder.phase_b):
+                    encoder._line_changed()
 
     def attach_uart(self, uart_id, device):
         self.uart_devices[uart_id] = device
@@ -59,6 +63,11 @@ board = _Board()
 
 def _pin_id(pin):
     return pin.id() if isinstance(pin, Pin) else pin
+
+
+def _input_level(pin_id):
+    pin = board.pins.get(pin_id)
+    return pin.value() if pin is not None else board.input_levels.get(pin_id, 0)
 
 
 class Pin:
@@ -179,8 +188,18 @@ class PWM:
         self.deinited = True
 
 
+# Count change per (previous AB << 2 | new AB), AB = A << 1 | B; +1 for A leading B, as the ESP32
+# port's machine.Encoder counts; 0 where both lines changed at once.
+_QUADRATURE_STEP = (0, -1, 1, 0, 1, 0, 0, -1, -1, 0, 0, 1, 0, 1, -1, 0)
+
+
 class Encoder:
-    """PCNT quadrature counter (ESP32 machine.Encoder); `count` is what the hardware has counted."""
+    """PCNT quadrature counter (ESP32 machine.Encoder); `count` is what the hardware has counted.
+
+    Tests move `count` directly, or drive the A/B lines with board.set_input (as
+    fakes.dc_motor.QuadratureLines does), which the unit counts like the peripheral: every edge
+    with phases=4, one per cycle with phases=1.
+    """
 
     def __init__(self, id, phase_a=None, phase_b=None, **kwargs):
         self._id = id
@@ -194,6 +213,20 @@ class Encoder:
         self.phases = phases
         self.count = 0
         self.deinited = False
+        self._lines = self._line_levels()
+        self._edges = 0
+
+    def _line_levels(self):
+        return (_input_level(self.phase_a) << 1) | _input_level(self.phase_b)
+
+    def _line_changed(self):
+        lines = self._line_levels()
+        step = _QUADRATURE_STEP[(self._lines << 2) | lines]
+        self._lines = lines
+        if step and not self.deinited:
+            before = self._edges * self.phases // 4
+            self._edges += step
+            self.count += self._edges * self.phases // 4 - before
 
     def value(self, value=None):
         current = self.count
