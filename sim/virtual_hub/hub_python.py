@@ -8,6 +8,7 @@ process-wide modules:
   MicroPython `os`, `import sys` a `sys` with MicroPython's `path` (['', '.frozen', '/lib']),
   `print_exception` and a hub `implementation`, and `import time` the simulator's MicroPython time
   with sleeps paced by the hub (see world.py);
+- `import gc` adds MicroPython's mem_free()/mem_alloc() (what is left before a MemoryError);
 - `import deflate` gives MicroPython's deflate (the host compresses staged programs with it);
 - modules the hub has on its flash (a helper next to the program, a package under /lib) import
   from there, compiled under their hub paths; a `.mpy` is refused with the reason (this hub runs
@@ -218,6 +219,7 @@ class HubPython:
         self.fs.cwd = "/"
         self.os = self.fs.os_module()
         self.os.dupterm = _no_dupterm
+        self.gc = _make_gc()
         self.sys = self._make_sys()
         self.builtins = self._make_builtins()
         self.namespace = {"__name__": "__main__", "__builtins__": self.builtins}
@@ -276,6 +278,8 @@ class HubPython:
             return self._time
         if name == "deflate":
             return deflate_module
+        if name == "gc":
+            return self.gc
         return None
 
     def _import(self, name, globals=None, locals=None, fromlist=(), level=0):
@@ -351,6 +355,37 @@ class HubPython:
     def run(self, code):
         """Execute compiled code in the REPL namespace (the caller handles exceptions)."""
         exec(code, self.namespace)
+
+
+def _make_gc():
+    """`gc` with MicroPython's mem_alloc()/mem_free(): this process's resident memory, and the
+    address space left before a MemoryError (the process's limit, else the free physical memory)."""
+    import gc
+    import resource
+
+    module = types.ModuleType("gc", gc.__doc__)
+    for name in ("collect", "enable", "disable", "isenabled"):
+        setattr(module, name, getattr(gc, name))
+    page = os.sysconf("SC_PAGE_SIZE")
+
+    def _statm():
+        with open("/proc/self/statm", "rb") as f:
+            size, resident = f.read().split()[:2]
+        return int(size) * page, int(resident) * page
+
+    def mem_alloc():
+        return _statm()[1]
+
+    def mem_free():
+        limit = resource.getrlimit(resource.RLIMIT_AS)[0]
+        if limit == resource.RLIM_INFINITY:
+            return os.sysconf("SC_AVPHYS_PAGES") * page
+        return max(0, limit - _statm()[0])
+
+    module.mem_alloc = mem_alloc
+    module.mem_free = mem_free
+    module.threshold = lambda amount=None: -1 if amount is None else None
+    return module
 
 
 def _no_dupterm(stream=None, index=0):

@@ -175,6 +175,7 @@ def test_host_calls_info_rtc_stage_run_and_read_back_the_run_log(hub, host):
     assert info["ok"] and info["chip"] == "esp32s3" and info["firmware"].startswith("2.7.1")
     assert info["accepts_mpy"] is False  # a virtual hub runs source, and says so
     assert info["log_slots"] == 10 and info["compression"] == ["zlib"]
+    assert info["free_bytes"] > 0
     assert host.call("h.set_rtc(1767225600000)")["epoch_ms"] >= 1767225600000
 
     payload = base64.b64encode(zlib.compress(DRIVE.encode())).decode()
@@ -361,3 +362,19 @@ def test_a_hub_on_stdio_speaks_the_same_protocol(tmp_path):
         raise
     assert proc.returncode == 0, err.decode()
     assert b"raw REPL; CTRL-B to exit\r\n>OKpiped 42\r\n\x04\x04>" in out
+
+
+def test_a_hub_nobody_listens_to_keeps_running_its_program(hub, tmp_path):
+    link = Host(hub.pty)
+    link.enter_raw()
+    program = "for i in range(5000):\n    print('line', i, 'of output nobody reads')\nprint('end')\n"
+    link.call(f"h.stage({base64.b64encode(program.encode()).decode()!r}, '/program.py')")
+    link.write(b"import openbricks.host_calls as h\nh.idle()\x04")
+    link.read_until(b'"idle": true}')
+    link.close()  # the host walks away; the pty keeps whatever the hub writes until it is full
+    hub.control("click")
+    wait_until(lambda: hub.control("status")["runs_started"] == 1, timeout_s=30)
+    wait_until(lambda: not hub.control("status")["running"], timeout_s=30)
+    with open(flash(hub, "openbricks_logs", "slot_0.log")) as f:
+        log = f.read()
+    assert "line 0 of output nobody reads" in log and "stopped: finished after" in log

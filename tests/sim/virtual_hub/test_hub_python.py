@@ -131,3 +131,8 @@ def test_nvs_commits_survive_a_new_process(tmp_path):
     path.write_text("{broken")
     with pytest.raises(ValueError, match="move it aside"):
         PersistentNVS(path)
+
+
+def test_gc_reports_memory_as_micropython_does(hub):
+    namespace = run(hub, "import gc\ngc.collect()\nfree = gc.mem_free()\nused = gc.mem_alloc()")
+    assert namespace["free"] > 0 and 10_000_000 < namespace["used"] < 2_000_000_000
