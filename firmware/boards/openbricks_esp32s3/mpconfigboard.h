@@ -18,3 +18,9 @@
 
 // micropython.RingIO: the BLE REPL bridge's fixed input/output rings.
 #define MICROPY_PY_MICROPYTHON_RINGIO       (1)
+
+// Raw-paste window = half of this. MicroPython's default (256 -> a 128-byte window) caps a BLE upload
+// near a sixth of the link: each window costs a round trip of two connection intervals. 4096 grants
+// 2 KB windows, which keeps the link busy; the BLE bridge's RX buffer (ble_repl.RX_BUFFER_BYTES)
+// holds two windows in flight. `openbricks paste-probe` measures what a hub really survives.
+#define MICROPY_REPL_STDIN_BUFFER_MAX       (4096)

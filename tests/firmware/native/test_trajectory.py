@@ -6,7 +6,7 @@ import math
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
 from openbricks_native import TrapezoidalProfile
@@ -273,12 +273,15 @@ def test_speed_never_exceeds_the_limit_unless_the_start_did(move):
 
 @settings(max_examples=200, deadline=None)
 @given(moves)
+@example(move=(0.0, 0.0, 137.0, 14239.150390625, 3373.66818875526, 312.8679459219802))  # time rounding
 def test_samples_are_continuous_across_phases(move):
     p, _ = rest_profile(move)
-    # Float32 rounding is the only allowed jump: a couple of ulps of the largest position reached.
+    # Float32 rounding is the only allowed jump: a couple of ulps of the largest position reached, plus
+    # the distance covered in a couple of ulps of the phase time (the boundary's own rounding).
     scale = max(1.0, np.abs(samples(p, 400)[:, 1]).max())
+    time_rounding = 2 * float(np.spacing(f32(p.duration_s))) * max(move[2], abs(move[5]))
     for dx, dv in boundary_jumps(p, eps_s=1e-7):
-        assert dx <= 4e-7 * scale
+        assert dx <= 4e-7 * scale + time_rounding
         assert dv <= 1e-5 * max(move[2], abs(move[5]), 1.0) + 1e-3
 
 
