@@ -135,6 +135,7 @@ def main(argv=None):
         print(f"virtual hub {args.name}: {exc}", file=sys.stderr)
         return 2
     control = ControlServer(hub, os.path.join(directory, SOCKET_NAME)).start()
+    hub.control_path = control.path
     _limit_memory(args.memory_mb)
 
     def ready():

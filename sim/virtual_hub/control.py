@@ -1,6 +1,7 @@
 """The virtual hub's control socket: what a person standing at a hub could do, for a host.
 
-A Unix socket in the hub's directory (`control.sock`) takes one JSON object per line and answers
+A Unix socket in the hub's directory (`control.sock`; in a private temp directory when that path is
+too long for a Unix socket, and always announced on start) takes one JSON object per line and answers
 one per line:
 
     {"op": "click"}     press and release the program button (starts or stops the program)
@@ -14,10 +15,12 @@ way to run code; this socket only does what the hub's hardware buttons do, plus 
 import json
 import os
 import socketserver
+import tempfile
 import threading
 
 SOCKET_NAME = "control.sock"
 MAX_LINE_BYTES = 4096
+MAX_SOCKET_PATH_BYTES = 100  # AF_UNIX paths are capped near 108 bytes
 
 
 class _Handler(socketserver.StreamRequestHandler):
@@ -40,6 +43,11 @@ class ControlServer:
     def __init__(self, hub, path):
         self.hub = hub
         self.path = os.fspath(path)
+        self._temp_dir = None
+        if len(os.fsencode(self.path)) > MAX_SOCKET_PATH_BYTES:
+            # A deep hub directory: the socket goes to a private temp dir (announced and in status).
+            self._temp_dir = tempfile.mkdtemp(prefix="openbricks-vhub-")
+            self.path = os.path.join(self._temp_dir, SOCKET_NAME)
         if os.path.exists(self.path):
             os.remove(self.path)  # left by a hub that was killed; the directory lock says it is ours now
         self._server = _Server(self.path, _Handler)
@@ -56,6 +64,8 @@ class ControlServer:
         self._server.server_close()
         try:
             os.remove(self.path)
+            if self._temp_dir is not None:
+                os.rmdir(self._temp_dir)
         except OSError:
             pass
 

@@ -65,7 +65,7 @@ class InterruptGate:
                     _clear_async_exc(self._thread_id, None)
                     self.wakeup.clear()
                 return
-            except BaseException:  # noqa: BLE001 - the interrupt being withdrawn arrived first
+            except BaseException:  # the interrupt being withdrawn arrived first
                 continue
 
     def discard_pending(self):

@@ -100,6 +100,7 @@ class VirtualHub:
         self.runs_started = 0
         self._on_ready = None
         self._link_started = False
+        self.control_path = None  # set by whoever serves the control socket
 
     # -- the link --------------------------------------------------------------------------------
 
@@ -196,11 +197,11 @@ class VirtualHub:
             try:
                 self.gate.open()
                 self.python.run(code)
-            except BaseException as exc:  # noqa: BLE001 - whatever hub code raised is its result
+            except BaseException as exc:  # whatever hub code raised is its result
                 outcome = exc
             finally:
                 self.gate.close()
-        except BaseException as late:  # noqa: BLE001 - an interrupt that landed as the code ended
+        except BaseException as late:  # an interrupt that landed as the code ended
             outcome = outcome or late
         if isinstance(outcome, HubShutdown) or self._closing.is_set():
             raise HubShutdown
@@ -324,6 +325,7 @@ class VirtualHub:
         return {
             "name": self.config.name,
             "pty": getattr(self.port, "path", None),
+            "control": self.control_path,
             "directory": self.config.directory,
             "world": self.config.world,
             "chassis": self.config.chassis,
@@ -345,7 +347,7 @@ def _stop_native_controllers():
 def _lock_directory(directory):
     """Hold `directory` for this process: two hubs on one flash would corrupt each other."""
     path = os.path.join(directory, LOCK_FILE)
-    handle = open(path, "a+")  # noqa: SIM115 - held for the process's lifetime
+    handle = open(path, "a+")  # held for the process's lifetime
     try:
         fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
     except BlockingIOError:

@@ -12,7 +12,6 @@ link, and file descriptor 1 is pointed at stderr, so stray prints from libraries
 import errno
 import os
 import select
-import threading
 import time
 import tty
 
@@ -88,7 +87,6 @@ class StdioPort:
         self._in = os.dup(0)
         self._out = os.dup(1)
         os.dup2(2, 1)  # anything else writing to fd 1 now lands on stderr
-        self._lock = threading.Lock()
         self.path = None
 
     def read(self, max_bytes=4096):

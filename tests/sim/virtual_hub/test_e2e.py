@@ -378,3 +378,27 @@ def test_a_hub_nobody_listens_to_keeps_running_its_program(hub, tmp_path):
     with open(flash(hub, "openbricks_logs", "slot_0.log")) as f:
         log = f.read()
     assert "line 0 of output nobody reads" in log and "stopped: finished after" in log
+
+
+def test_the_friendly_repl_prints_expression_values_and_tracebacks(host):
+    host.write(b"\x02")
+    assert host.read_until(b">>> ").endswith(
+        b"virtual hub RobotA; openbricks virtual hub (simulated) with ESP32S3"
+        b'\r\nType "help()" for more information.\r\n>>> '
+    )
+    host.write(b"6 * 7\r")
+    assert host.read_until(b">>> ") == b"6 * 7\r\n42\r\n>>> "
+    host.write(b"undefined_name\r")
+    assert b"NameError: name 'undefined_name' is not defined\r\n>>> " in host.read_until(b">>> ")
+
+
+def test_a_deep_hub_directory_still_gets_a_control_socket(tmp_path):
+    deep = tmp_path / ("d" * 60) / ("e" * 60) / "RobotE"
+    process = HubProcess(deep, "RobotE")
+    try:
+        status = process.control("status")
+        assert status["ok"] and status["control"] == process.control_path
+        assert not process.control_path.startswith(str(deep))
+    finally:
+        assert process.stop() == 0, process.stderr()
+    assert not os.path.exists(process.control_path)
