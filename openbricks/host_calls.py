@@ -370,24 +370,24 @@ def record_provenance(verdict):
 _MAX_NAME_BYTES = 26  # what fits in a legacy BLE advertisement beside the flags
 
 
-def _set_hub_name(name):
+def _set_hub_name(hub_name):
     from openbricks import bluetooth
 
-    if not isinstance(name, str) or not name or len(name.encode()) > _MAX_NAME_BYTES:
+    if not isinstance(hub_name, str) or not hub_name or len(hub_name.encode()) > _MAX_NAME_BYTES:
         raise ValueError(
-            "name=%r: give 1..%d bytes of text (it is advertised over BLE)" % (name, _MAX_NAME_BYTES)
+            "hub_name=%r: give 1..%d bytes of text (it is advertised over BLE)" % (hub_name, _MAX_NAME_BYTES)
         )
     import esp32
 
     nvs = esp32.NVS(bluetooth.NVS_NAMESPACE)
-    nvs.set_blob(bluetooth.NVS_KEY_HUB_NAME, name.encode())
+    nvs.set_blob(bluetooth.NVS_KEY_HUB_NAME, hub_name.encode())
     nvs.commit()
     return {"hub_name": bluetooth.hub_name()}  # read back from NVS, so the host can verify it
 
 
-def set_hub_name(name):
+def set_hub_name(hub_name):
     """Store the name the hub advertises (what `openbricks flash --name` sets) and read it back."""
-    return _call(_set_hub_name, name)
+    return _call(_set_hub_name, hub_name)
 
 
 # -- servo bus: scan and re-ID through the hub ---------------------------------------------------

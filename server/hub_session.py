@@ -190,7 +190,7 @@ async def set_up_flashed_hub(port: str, name: str, provenance: str, qtr_calibrat
             repl = RawRepl(link)
             await repl.enter(timeout_s=3.0)
             await repl.info()
-            named = await repl.call("set_hub_name", name=name)
+            named = await repl.call("set_hub_name", hub_name=name)
             if named.get("hub_name") != name:
                 raise CliError(
                     f"the hub read back name {named.get('hub_name')!r} instead of {name!r}; flash again"
@@ -200,7 +200,9 @@ async def set_up_flashed_hub(port: str, name: str, provenance: str, qtr_calibrat
                 await repl.put("/qtr.cal", qtr_calibration)
             await link.write(b"import machine\r\nmachine.reset()\r\n\x04")  # no answer comes: it resets
             return {"hub_name": named["hub_name"], "firmware": recorded["firmware"]}
-        except (LinkError, OSError) as exc:
+        except HubCallError as exc:
+            raise CliError(f"the flashed hub on {port} refused {exc.call}: {exc.error}") from None
+        except (LinkError, OSError) as exc:  # not up yet: still booting
             last_error = exc
             await asyncio.sleep(0.5)
         finally:

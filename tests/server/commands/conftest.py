@@ -14,6 +14,8 @@ from pathlib import Path
 
 import pytest
 
+from ..flash.conftest import fake_esptool  # noqa: F401 - shared fixture: flash runs a fake esptool here too
+
 HUB_START_TIMEOUT_S = 60
 CLI_TIMEOUT_S = 90
 
