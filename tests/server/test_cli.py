@@ -1,0 +1,106 @@
+"""The parser matches the manual's chapter 3: commands, option names, defaults; --help stays light."""
+
+import subprocess
+import sys
+
+import pytest
+
+from openbricks_server.cli import COMMANDS, build_parser, main
+
+
+def parse(*argv):
+    return build_parser().parse_args(list(argv))
+
+
+def test_every_command_of_chapter_3_is_there():
+    assert set(COMMANDS) == {
+        "flash",
+        "run",
+        "upload",
+        "stop",
+        "list",
+        "log",
+        "servo-id",
+        "paste-probe",
+        "docs",
+        "doc",
+        "sim",
+    }
+
+
+def test_defaults_are_the_manuals():
+    flash = parse("flash", "--name", "RobotA")
+    assert (flash.chip, flash.baud, flash.port, flash.firmware) == ("auto", 460800, None, None)
+    assert not (flash.with_qtr_init or flash.skip_erase or flash.yes or flash.verbose)
+    assert parse("flash", "--name", "A", "-v").verbose
+    run = parse("run", "-n", "RobotA", "main.py")
+    assert (run.script, run.code, run.scan_timeout, run.debug) == ("main.py", None, 5.0, False)
+    assert parse("upload", "-n", "A", "x.py").path is None
+    assert parse("stop", "-n", "A").scan_timeout == 5.0
+    listing = parse("list")
+    assert (listing.timeout, listing.all) == (5.0, False)
+    log = parse("log", "-n", "A")
+    assert (log.list, log.run, log.scan_timeout) == (False, None, 5.0)
+    servo = parse("servo-id", "--scan")
+    assert (servo.tx, servo.rx, servo.baudrate, servo.timeout, servo.scan_timeout) == (
+        14,
+        41,
+        1000000,
+        0.02,
+        5.0,
+    )
+    assert (servo.port, servo.name, servo.old_id, servo.new_id) == (None, None, None, None)
+    probe = parse("paste-probe", "-n", "A")
+    assert (probe.max, probe.timeout, probe.scan_timeout) == (8192, 15.0, 5.0)
+    assert parse("doc", "cli").topic == "cli"
+
+
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        (["run", "-n", "A"], "give a SCRIPT to run, or code with -c"),
+        (["run", "-n", "A", "-c", "print(1)", "x.py"], "give either SCRIPT or -c CODE, not both"),
+        (["servo-id", "-p", "/dev/ttyUSB0", "-n", "A", "--scan"], "not allowed with argument"),
+        (["servo-id"], "give the NEW_ID to assign, or --scan"),
+        (["flash"], "the following arguments are required: --name"),
+    ],
+)
+def test_wrong_combinations_are_usage_errors(capsys, argv, message):
+    with pytest.raises(SystemExit) as stopped:
+        main(argv)
+    assert stopped.value.code == 2
+    assert message in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("command", sorted(set(COMMANDS) - {"sim", "doc"}))
+def test_every_subcommand_has_help(command, capsys):
+    with pytest.raises(SystemExit) as stopped:
+        main([command, "--help"])
+    assert stopped.value.code == 0
+    assert f"usage: openbricks {command}" in capsys.readouterr().out
+
+
+def test_help_imports_no_command_machinery():
+    probe = (
+        "import sys\n"
+        "from openbricks_server import cli\n"
+        "try:\n"
+        "    cli.main(['--help'])\n"
+        "except SystemExit:\n"
+        "    pass\n"
+        "heavy = [m for m in ('asyncio', 'bleak', 'serial', 'mujoco', 'cryptography', 'openbricks_native',\n"
+        "                     'openbricks_server.commands', 'openbricks_server.link') if m in sys.modules]\n"
+        "print(heavy, file=sys.stderr)\n"
+    )
+    done = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, timeout=60)
+    assert done.stderr.strip() == "[]"
+
+
+def test_sim_forwards_everything_including_help():
+    done = subprocess.run(
+        [sys.executable, "-m", "openbricks_server.cli", "sim", "run", "--help"],
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
+    assert done.returncode == 0 and "usage: openbricks sim run" in done.stdout and "--no-shim" in done.stdout
