@@ -109,3 +109,30 @@ def test_names_that_cannot_be_advertised_are_refused(tmp_path, board, keys, fake
     done = cli(env, "flash", "--name", "x" * 30, "--port", board.pty)
     assert done.returncode == 1 and "a Bluetooth advertisement carries at most 26" in done.stderr
     assert fake_esptool.calls() == []
+
+
+def test_without_firmware_the_newest_release_for_the_chip_is_downloaded_and_cached(
+    tmp_path, board, keys, fake_esptool
+):
+    import json
+
+    private, public = keys
+    releases = tmp_path / "releases"
+    releases.mkdir()
+    names = {}
+    for chip in ("esp32", "esp32s3"):
+        names[chip] = f"openbricks-{chip}-firmware-2.9.0.bin"
+        image(releases, chip, "2.9.0", key=private, name=names[chip])
+    (releases / "latest.json").write_text(json.dumps({"version": "2.9.0", "images": names}))
+    env = dict(
+        flash_env(board, fake_esptool, public),
+        OPENBRICKS_RELEASES_URL=releases.as_uri(),
+        OPENBRICKS_CACHE_DIR=str(tmp_path / "cache"),
+    )
+    done = cli(env, "flash", "--name", "RobotA", "--port", board.pty, "--verbose")
+    assert done.returncode == 0, done.stderr
+    cached = tmp_path / "cache" / "firmware" / "2.9.0" / names["esp32s3"]
+    assert cached.is_file() and fake_esptool.calls()[-1][-1] == str(cached)
+    assert "version 2.9.0 (downloaded)" in done.stderr and "official: signature verified" in done.stderr
+    assert f"cache {cached}" in done.stderr  # --verbose shows cache paths ...
+    assert "$ " in done.stderr and "write-flash -z 0x0" in done.stderr  # ... and esptool command lines

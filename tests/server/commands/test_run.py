@@ -104,3 +104,10 @@ def test_missing_non_utf8_and_oversized_files_are_refused(env, tmp_path):
     huge = tmp_path / "huge.py"
     huge.write_text("#" * (300 * 1024))
     assert "a hub takes programs up to" in cli(env, "run", "-n", "RobotA", str(huge)).stderr
+
+
+def test_debug_dumps_every_packet_received_on_stderr(env):
+    done = cli(env, "run", "-n", "RobotA", "--debug", "-c", "print('traced')")
+    assert done.returncode == 0 and done.stdout == "traced\n"
+    dumps = [line for line in done.stderr.splitlines() if line.startswith("[") and " B  " in line]
+    assert dumps and any("|traced" in line or "74 72 61 63 65 64" in line for line in dumps)
