@@ -4,3 +4,18 @@
 def pytest_collection_modifyitems(config, items):
     """Run the fast unit tests first and the slow end-to-end ones last, in one session."""
     items.sort(key=lambda item: item.get_closest_marker("e2e") is not None)
+
+
+def _hypothesis_profiles():
+    """Under CI the property tests replay a fixed set of examples, so a landing is judged on the
+    code, not on which random examples a run happened to draw; locally they explore afresh."""
+    import os
+
+    from hypothesis import settings
+
+    settings.register_profile("ci", derandomize=True, print_blob=True)
+    if os.environ.get("CI"):
+        settings.load_profile("ci")
+
+
+_hypothesis_profiles()
