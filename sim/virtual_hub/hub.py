@@ -247,22 +247,21 @@ class VirtualHub:
             with self._state_lock:
                 self.protocol.start_boot()
         self._fresh_python()
-        errors = []
-        for filename, source, wanted in (
-            ("boot.py", frozen.BOOT_PY, True),
-            ("main.py", frozen.MAIN_PY, not self.protocol.raw_mode),
-        ):
-            if not wanted:
-                continue
-            outcome = self._run(self.python.compile(source, filename))
+        outcome = self._run(self.python.compile(frozen.BOOT_PY, "boot.py"))
+        if self._reset_requested(outcome):
+            return self._reset(hard=True)
+        error = self._error_text(outcome)
+        if error:
+            self.stdout.write(error)  # printed as it happens; main.py still runs, as on the hub
+        if not self._link_started:
+            self._start_link()
+        error = None
+        if not self.protocol.raw_mode:
+            outcome = self._run(self.python.compile(frozen.MAIN_PY, "main.py"))
             if self._reset_requested(outcome):
                 return self._reset(hard=True)
-            text = self._error_text(outcome)
-            if text:
-                errors.append(text)
-            if filename == "boot.py" and not self._link_started:
-                self._start_link()
-        self._finish("".join(errors) or None)
+            error = self._error_text(outcome)
+        self._finish(error)
         return None
 
     def _fresh_python(self):

@@ -402,3 +402,14 @@ def test_a_deep_hub_directory_still_gets_a_control_socket(tmp_path):
     finally:
         assert process.stop() == 0, process.stderr()
     assert not os.path.exists(process.control_path)
+
+
+def test_a_users_boot_py_and_main_py_on_the_flash_run_at_reset(hub, host):
+    host.exec_raw(
+        "f = open('/boot.py', 'w')\nf.write('print(\"user boot\")\\n1/0\\n')\nf.close()\n"
+        "f = open('/main.py', 'w')\nf.write('print(\"user main\")\\n')\nf.close()"
+    )
+    host.write(b"import machine\nmachine.reset()\x04")
+    assert host.read_exactly(2) == b"OK"
+    text = host.read_until(b">>> ").decode()
+    assert text.index("user boot") < text.index("ZeroDivisionError") < text.index("user main")
