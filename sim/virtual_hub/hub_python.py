@@ -227,14 +227,16 @@ class HubPython:
     def forget_modules(self):
         """Drop the runtime and every flash module, so the next import loads them afresh."""
         for name in list(sys.modules):
-            if (
-                name == RUNTIME_PACKAGE
-                or name.startswith(RUNTIME_PACKAGE + ".")
-                or name in self.flash_modules
-            ):
+            if name == RUNTIME_PACKAGE or name.startswith(RUNTIME_PACKAGE + "."):
                 del sys.modules[name]
-        self.flash_modules.clear()
+        self.forget_flash_modules()
         importlib.invalidate_caches()
+
+    def forget_flash_modules(self):
+        """Drop the modules imported from the flash (a re-uploaded helper then loads fresh)."""
+        for name in self.flash_modules:
+            sys.modules.pop(name, None)
+        self.flash_modules.clear()
 
     def _make_sys(self):
         module = _HubSys("sys", "MicroPython's sys on the virtual hub.")

@@ -22,7 +22,7 @@ def hub(tmp_path):
     try:
         yield python
     finally:
-        python.forget_modules()
+        python.forget_flash_modules()
         python.uninstall()
 
 
@@ -53,7 +53,7 @@ def test_a_module_on_the_flash_imports_from_the_program_directory_and_lib(hub):
     write(hub, "/helper_mod.py", "import shapes\nVALUE = shapes.square(7)\n")
     namespace = run(hub, "import helper_mod\nvalue = helper_mod.VALUE\nwhere = helper_mod.__file__")
     assert namespace["value"] == 49 and namespace["where"] == "/helper_mod.py"
-    hub.forget_modules()
+    hub.forget_flash_modules()
     assert "helper_mod" not in sys.modules and "shapes" not in sys.modules
 
 
