@@ -121,5 +121,50 @@ def binding_ticks() -> list[Row]:
     return rows
 
 
+# The same period through the reference's C extension (openbricks_sim._native of 4.36.0): its
+# DriveBase tick writes each servo's target speed, then each Servo tick turns an encoder count into
+# power. Same tick count, rounds, encoder ramp and loop shape as ours.
+REFERENCE_PERIOD = """
+import statistics, time
+import openbricks_sim._native as n
+TICKS, ROUNDS = {ticks}, {rounds}
+counts = [int(i * 0.36 / (360.0 / 4096.0)) for i in range(TICKS)]
+def loop():
+    left, right = n.Servo(4096), n.Servo(4096)
+    db = n.DriveBase(left, right, 56.0, 114.0)
+    db.straight(0, 100000.0, 175.9)
+    db_tick, left_tick, right_tick = db.tick, left.tick, right.tick
+    for now, count in enumerate(counts):
+        db_tick(now)
+        left_tick(count, now)
+        right_tick(count, now)
+loop()
+per_tick = []
+for _ in range(ROUNDS):
+    start = time.perf_counter_ns()
+    loop()
+    per_tick.append((time.perf_counter_ns() - start) / TICKS)
+print(min(per_tick), statistics.median(per_tick))
+"""
+
+
+def reference_period(ours_ns: float) -> list[Row]:
+    from benchmarks import reference
+
+    out = reference.run_python(REFERENCE_PERIOD.format(ticks=BINDING_TICKS, rounds=BINDING_ROUNDS))
+    best, median = (float(v) for v in out.split())
+    return [
+        Row(
+            "reference 4.36.0: control period (DriveBase + 2 Servos)",
+            best,
+            "ns",
+            f"best of {BINDING_ROUNDS}; median {median:.1f} ns; loop included",
+        ),
+        Row("control period, ours / reference", ours_ns / best, "x", "best vs best; below 1 is faster"),
+    ]
+
+
 def run() -> list[Row]:
-    return c_ticks() + binding_ticks()
+    binding = binding_ticks()
+    period = next(row.value for row in binding if row.case.startswith("binding: control period"))
+    return c_ticks() + binding + reference_period(period)
