@@ -1,0 +1,171 @@
+"""Paces a simulation for someone watching it: play, pause, and a speed that can change mid-run.
+
+A program run advances simulated time itself (its sleeps and bus transfers move the SimClock), so the
+viewer cannot step the physics; it rides along instead. The Pacer is a timer on the simulation's own
+clock: every time it fires, the physics has just reached that instant, so it hands a fresh Frame to
+the viewer and then holds the program's thread until the wall clock has caught up with simulated
+time at the chosen speed (or for as long as the run is paused). The physics between two firings
+still runs as one native call, so watching costs a few microseconds per frame, not per step.
+
+Paced, the timer fires about `frame_hz` times per wall-clock second: at 0.25x every 4 ms of
+simulated time, at 8x every 133 ms. As fast as possible, it fires every few tens of simulated ms
+(so a pause or a new speed lands promptly) and hands over a frame only when a frame period of wall
+time has passed. The simulation's own clock must not pace as well (its speed must be None).
+"""
+
+from __future__ import annotations
+
+import threading
+import time
+
+DEFAULT_FRAME_HZ = 60
+# Behind the wall clock by more than this (a slow machine at 8x), the pacer stops trying to catch up
+# rather than racing through the backlog once the machine has time again.
+MAX_LAG_S = 0.1
+# As fast as possible: bounds on the simulated time between firings. The upper bound is how late a
+# pause or a new speed can land, in simulated time; frames are still handed over only ~frame_hz times
+# a second.
+_MIN_FREE_RUN_MS = 5
+_MAX_FREE_RUN_MS = 50
+# A firing this close to a frame period after the last frame still makes one (paced firings jitter).
+_FRAME_SLACK = 0.8
+
+
+class Pacer:
+    """Hands `on_frame()` a chance to look at the world ~frame_hz times a second, and holds time back.
+
+    speed is a real-time factor (1.0 = real time) or None (as fast as possible). `speed` and
+    `paused` may be changed from any thread; a change takes effect at once, even mid-wait.
+    """
+
+    def __init__(self, clock, on_frame, speed: float | None = 1.0, frame_hz: float = DEFAULT_FRAME_HZ):
+        if frame_hz <= 0:
+            raise ValueError(f"frame_hz must be positive, not {frame_hz!r}")
+        if getattr(clock, "speed", None) is not None:
+            raise ValueError(
+                "the simulation's clock paces itself (speed set when it was built): build it with "
+                "speed=None and give the speed to the viewer, or the two would wait on each other"
+            )
+        self._clock = clock
+        self._on_frame = on_frame
+        self._frame_hz = float(frame_hz)
+        self._speed = _checked_speed(speed)
+        self._paused = False
+        self._running = False
+        self._handle = None
+        self._changed = threading.Event()  # set on any control change: wakes a waiting pacer
+        self._anchor = None  # (wall_s, sim_us): real-time pacing is measured from here
+        self._last_frame_s = None  # wall time of the latest on_frame()
+        self._last_tick = None  # (wall_s, sim_us) at the latest firing, for the free-running rate
+        self._rate_from = None  # ... and at the one before it
+
+    # --- controls (any thread) ----------------------------------------------------------------
+
+    @property
+    def speed(self) -> float | None:
+        return self._speed
+
+    @speed.setter
+    def speed(self, value: float | None) -> None:
+        self._speed = _checked_speed(value)
+        self._anchor = None  # pace the new speed from now, not from the start of the run
+        self._changed.set()
+
+    @property
+    def paused(self) -> bool:
+        return self._paused
+
+    @paused.setter
+    def paused(self, value: bool) -> None:
+        self._paused = bool(value)
+        self._anchor = None
+        self._changed.set()
+
+    def start(self) -> None:
+        """Begin pacing from the clock's current instant."""
+        if self._running:
+            return
+        self._running = True
+        self._anchor = None
+        self._last_tick = self._rate_from = self._last_frame_s = None
+        self._schedule()
+
+    def stop(self) -> None:
+        """Stop holding time back (any thread): a paused or waiting run goes on at once."""
+        self._running = False
+        handle, self._handle = self._handle, None
+        if handle is not None:
+            handle.cancel()
+        self._changed.set()
+
+    # --- on the simulation's thread -------------------------------------------------------------
+
+    def _schedule(self) -> None:
+        self._handle = self._clock.schedule(self._tick, self._next_delay_ms() * 1000)
+
+    def _tick(self) -> None:
+        if not self._running:
+            return
+        now = time.perf_counter()
+        previous, self._last_tick = self._last_tick, (now, self._clock.now_us())
+        if self._last_frame_s is None or now - self._last_frame_s >= _FRAME_SLACK / self._frame_hz:
+            self._last_frame_s = now
+            self._on_frame()
+        self._hold()
+        if self._running:
+            self._rate_from = previous
+            self._schedule()
+
+    def _hold(self) -> None:
+        """Wait while paused, or until the wall clock catches up with simulated time."""
+        while self._running:
+            self._changed.clear()  # cleared before the state is read: a change after this still wakes us
+            if self._paused:
+                self._changed.wait()
+                continue
+            speed = self._speed
+            if speed is None:
+                return
+            now = time.perf_counter()
+            sim_us = self._clock.now_us()
+            anchor = self._anchor
+            if anchor is None:
+                self._anchor = (now, sim_us)
+                return
+            due = anchor[0] + (sim_us - anchor[1]) / 1e6 / speed
+            if now - due > MAX_LAG_S:
+                self._anchor = (now, sim_us)
+                return
+            if due <= now:
+                return
+            self._changed.wait(due - now)
+            if not self._changed.is_set():
+                return
+
+    def _next_delay_ms(self) -> int:
+        """Simulated ms until the next frame: about one wall-clock frame at the current speed."""
+        speed = self._speed
+        if speed is not None:
+            return max(1, round(speed * 1000.0 / self._frame_hz))
+        # The rate between the last two firings (a pause or a slower speed in between only makes the
+        # next interval short; the one after is right again).
+        earlier, last = self._rate_from, self._last_tick
+        if earlier is None or last is None:
+            return _MIN_FREE_RUN_MS
+        wall_s = last[0] - earlier[0]
+        sim_ms = (last[1] - earlier[1]) / 1000.0
+        if wall_s <= 0 or sim_ms <= 0:
+            return _MIN_FREE_RUN_MS
+        rate = sim_ms / wall_s  # simulated ms per wall-clock second
+        return int(min(_MAX_FREE_RUN_MS, max(_MIN_FREE_RUN_MS, rate / self._frame_hz)))
+
+
+def _checked_speed(speed):
+    if speed is None:
+        return None
+    speed = float(speed)
+    if not speed > 0:
+        raise ValueError(
+            f"speed must be a positive real-time factor or None (as fast as possible), not {speed}"
+        )
+    return speed

@@ -1,0 +1,107 @@
+"""`openbricks sim run PROGRAM --viewer`: run a program while a browser watches, run it again on request.
+
+The program runs on the calling thread (the main thread, so Ctrl-C and the wall-clock watchdog work
+as in a headless run), in a fresh Simulation each time: a restart is a new run of the same job, the
+same world and seed, exactly as a second `sim run` would be. When a run ends the page keeps showing
+where it ended until Restart is pressed or the terminal's Ctrl-C ends the session.
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+from collections.abc import Callable
+
+from ..run import STOPPED, ProgramRun, RunResult
+from ..simulation import Simulation
+from .viewer import DEFAULT_HOST, DEFAULT_PORT, SimViewer
+
+
+def serve_run(
+    program,
+    world: str = "empty",
+    chassis: str = "st3032",
+    seed: int = 0,
+    start_mm_deg=None,
+    speed: float | None = 1.0,
+    limit_ms: int | None = 60_000,
+    echo: Callable[[str], object] | None = None,
+    source: str | None = None,
+    host: str = DEFAULT_HOST,
+    port: int = DEFAULT_PORT,
+    keep_open: bool = True,
+    on_ready: Callable[[str], object] | None = None,
+    on_result: Callable[[RunResult], object] | None = None,
+) -> RunResult:
+    """Run `program` (a file, or `source` named `program`) with the 3D view served at host:port.
+
+    speed: the real-time factor runs start at (the page can change it; None = as fast as possible).
+    echo: where the program's output also goes (the terminal). on_ready(url) is called once the page
+    can be opened; on_result(result) after every run. With keep_open=False the session ends with the
+    first run; otherwise it ends on Ctrl-C (in the terminal), returning the last run's result.
+
+    No wall-clock limit applies: a paused or slowed run is meant to take long, and the page's Stop
+    button ends a program that never lets simulated time pass.
+    """
+    if source is None:
+        with open(program, encoding="utf-8") as f:
+            source = f.read()
+    filename = os.path.basename(os.fspath(program))
+    job = {
+        "program": os.fspath(program),
+        "world": world,
+        "chassis": chassis,
+        "seed": seed,
+        "start_mm_deg": list(start_mm_deg) if start_mm_deg is not None else None,
+        "speed": speed,
+        "limit_ms": limit_ms,
+        "viewer": True,
+    }
+    with SimViewer(host, port, speed=speed) as viewer:
+        if on_ready is not None:
+            on_ready(viewer.url)
+
+        def tee(text):
+            viewer.write(text)
+            if echo is not None:
+                echo(text)
+
+        while True:
+            result = _one_run(
+                viewer, source, filename, (world, chassis, seed, start_mm_deg, limit_ms), tee, job
+            )
+            if on_result is not None:
+                on_result(result)
+            if viewer.restart_requested.is_set():
+                viewer.output.clear()
+                continue
+            if result.exit == STOPPED and not viewer.stop_requested.is_set():
+                return result  # Ctrl-C in the terminal: the person wants out, not a frozen page
+            if not keep_open:
+                return result
+            try:
+                viewer.wait_for_restart()
+            except KeyboardInterrupt:
+                return result
+            viewer.output.clear()
+
+
+def _one_run(viewer, source, filename, setup, echo, job) -> RunResult:
+    world, chassis, seed, start_mm_deg, limit_ms = setup
+    simulation = Simulation(world, chassis, seed, start_mm_deg, speed=None, limit_ms=limit_ms)
+    result = None
+    try:
+        run = ProgramRun(simulation)
+        viewer.attach(simulation, stop=run.request_stop)
+        try:
+            result = run.run(source, filename, None, echo, job)
+        finally:
+            viewer.detach(result)
+    finally:
+        simulation.close()
+    return result
+
+
+def print_url(url: str) -> None:
+    """The default announcement: where to point the browser, on stderr (stdout is the program's)."""
+    print(f"3D view: {url}  (Ctrl-C to quit)", file=sys.stderr, flush=True)

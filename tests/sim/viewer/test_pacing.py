@@ -1,0 +1,134 @@
+"""Pacing a simulation for a watcher: simulated time follows the wall clock at the chosen speed, stands
+still while paused, and a change of speed or a stop takes effect at once, even mid-wait.
+
+The simulated robot stands idle; what is measured is how long advancing its clock takes in wall time,
+which is what a person watching the run experiences."""
+
+import threading
+import time
+
+import pytest
+
+from openbricks_sim.simulation import Simulation
+from openbricks_sim.viewer.pacing import Pacer
+
+
+@pytest.fixture
+def sim():
+    simulation = Simulation("empty", "st3032", epoch_ms=0)
+    yield simulation
+    simulation.close()
+
+
+def wall_time_to_advance(clock, ms):
+    start = time.perf_counter()
+    clock.advance_us(ms * 1000)
+    return time.perf_counter() - start
+
+
+class FrameCounter:
+    def __init__(self):
+        self.count = 0
+
+    def __call__(self):
+        self.count += 1
+
+
+def advance_in_background(clock, ms):
+    """Advance the clock on another thread (as a program would); returns the thread."""
+    thread = threading.Thread(target=clock.advance_us, args=(ms * 1000,), daemon=True)
+    thread.start()
+    return thread
+
+
+@pytest.mark.parametrize("speed", [0.5, 2.0, 4.0])
+def test_simulated_time_follows_the_wall_clock_at_the_chosen_speed(sim, speed):
+    pacer = Pacer(sim.clock, FrameCounter(), speed=speed)
+    pacer.start()
+    wall_s = wall_time_to_advance(sim.clock, 1000)
+    assert wall_s == pytest.approx(1.0 / speed, rel=0.15, abs=0.03)
+
+
+def test_as_fast_as_possible_never_waits(sim):
+    pacer = Pacer(sim.clock, FrameCounter(), speed=None)
+    pacer.start()
+    wall_s = wall_time_to_advance(sim.clock, 5000)
+    assert wall_s < 1.0, f"5 s of an idle robot took {wall_s:.2f} s: something waited"
+
+
+@pytest.mark.parametrize("speed", [0.25, 1.0, 8.0, None])
+def test_the_viewer_gets_about_frame_hz_frames_whatever_the_speed(sim, speed):
+    frames = FrameCounter()
+    pacer = Pacer(sim.clock, frames, speed=speed, frame_hz=60)
+    pacer.start()
+    # Advance for about a second of wall time at this speed (as fast as possible: 20 s simulated).
+    ms = 20_000 if speed is None else round(1000 * speed)
+    wall_s = wall_time_to_advance(sim.clock, ms)
+    rate = frames.count / wall_s
+    assert 30 <= rate <= 90, f"{frames.count} frames in {wall_s:.2f} s at speed {speed}"
+
+
+def test_pause_stops_simulated_time_and_resume_goes_on_from_there(sim):
+    pacer = Pacer(sim.clock, FrameCounter(), speed=1.0)
+    pacer.start()
+    thread = advance_in_background(sim.clock, 2000)
+    time.sleep(0.3)
+    pacer.paused = True
+    time.sleep(0.1)  # the pause lands at the next frame
+    held_at = sim.clock.now_ms()
+    time.sleep(0.6)
+    assert sim.clock.now_ms() == held_at, "simulated time moved while paused"
+    assert thread.is_alive()
+    pacer.paused = False
+    thread.join(timeout=5.0)
+    assert not thread.is_alive()
+    assert sim.clock.now_ms() == 2000
+
+
+def test_a_new_speed_applies_at_once_even_in_the_middle_of_a_wait(sim):
+    pacer = Pacer(sim.clock, FrameCounter(), speed=0.1)  # 60 s of simulated time would take 10 min
+    pacer.start()
+    thread = advance_in_background(sim.clock, 60_000)
+    time.sleep(0.3)
+    switched = time.perf_counter()
+    pacer.speed = None
+    thread.join(timeout=10.0)
+    assert not thread.is_alive()
+    assert time.perf_counter() - switched < 3.0
+
+
+def test_slowing_down_mid_run_paces_from_the_change_not_from_the_start(sim):
+    pacer = Pacer(sim.clock, FrameCounter(), speed=None)
+    pacer.start()
+    sim.clock.advance_us(5_000_000)  # 5 s simulated in a blink
+    pacer.speed = 2.0
+    # Measured from the run's start, 5.5 s simulated at 2x would be "due" 2.75 s in: far behind, so a
+    # pacer anchored at the start would not wait at all.
+    assert wall_time_to_advance(sim.clock, 500) == pytest.approx(0.25, abs=0.08)
+
+
+def test_stop_releases_a_paused_run(sim):
+    pacer = Pacer(sim.clock, FrameCounter(), speed=1.0)
+    pacer.start()
+    pacer.paused = True
+    thread = advance_in_background(sim.clock, 500)
+    time.sleep(0.3)
+    assert thread.is_alive()
+    pacer.stop()
+    thread.join(timeout=5.0)
+    assert not thread.is_alive() and sim.clock.now_ms() == 500
+
+
+def test_a_clock_that_already_paces_itself_is_refused():
+    simulation = Simulation("empty", "st3032", speed=1.0)
+    try:
+        with pytest.raises(ValueError, match="speed=None"):
+            Pacer(simulation.clock, FrameCounter())
+    finally:
+        simulation.close()
+
+
+def test_a_speed_that_is_not_a_positive_number_is_refused(sim):
+    pacer = Pacer(sim.clock, FrameCounter())
+    with pytest.raises(ValueError, match="positive real-time factor"):
+        pacer.speed = 0
