@@ -24,6 +24,9 @@ def packages() -> list[str]:
 setup(
     packages=packages(),
     package_dir=PACKAGE_FOLDERS,
+    # Data the installed packages read at run time (a wheel carries only what is named here).
+    package_data={"openbricks_server": ["keys/*.pub", "flash/*.json"]},
+    exclude_package_data={"openbricks_sim": ["native/*"]},
     ext_modules=[
         Extension(
             "openbricks_native",

@@ -44,7 +44,7 @@ PASTE_BANNER = b"\r\npaste mode; Ctrl-C to cancel, Ctrl-D to finish\r\n=== "
 SOFT_REBOOT = b"MPY: soft reboot\r\n"
 PROMPT = b">>> "
 CONTINUATION = b"... "
-DEFAULT_PASTE_WINDOW = 128  # MicroPython's MICROPY_REPL_STDIN_BUFFER_MAX (256) / 2
+DEFAULT_PASTE_WINDOW = 2048  # half the firmware boards' MICROPY_REPL_STDIN_BUFFER_MAX (4096)
 
 # What started the code now running: it decides the framing of its output.
 RAW = "raw"  # raw REPL, source sent before Ctrl-D
