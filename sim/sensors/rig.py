@@ -3,9 +3,14 @@
   I2C0 (SDA 15, SCL 16)  TCA9548A at 0x70; a TCS34725 on channel n for each chassis colour
                          site color_n (channel 0 = left, 1 = right); the laser range finder
                          (a VL53L0X, or a VL53L1X) on channel 7; a BNO055 at 0x28
-  SPI (SCK 12, MOSI 13, MISO 11, CS 17)  ICM-45686
+  SPI (SCK 12, MOSI 13, MISO 11, CS 17)  ICM-45686; on the DC build (jgb37) SCK 4, MOSI 5, MISO 6,
+                         CS 21 instead, because that build's motors take 11, 12, 13 and 17
   ADC GPIO 1..10         the QTRLineSensor window over the `qtr` site
   GPIO 18 / 40           HC-SR04 TRIG / ECHO (pins the manual's map leaves free)
+
+The DC build's motors (manual 2.7) also sit on ADC pins 1, 2 and 7..10: the QTR window stays there,
+so a program can use the bar or the motors on that chassis but not both, as on the real robot (the
+pins guard names the pin).
 
 Every 0x29 part sits behind the mux because that is the only way they can
 share one bus: a chip wired straight to the bus at 0x29 collides with any
@@ -37,10 +42,23 @@ MUX_ADDRESS = 0x70
 BNO055_ADDRESS = 0x28
 SHARED_ADDRESS = 0x29  # every TCS34725 and both VL53 parts
 RANGE_FINDER_CHANNEL = 7
-ICM45686_CS = 17
 HCSR04_TRIG, HCSR04_ECHO = 18, 40
 RANGE_FINDERS = ("vl53l0x", "vl53l1x")
 BARE_0X29 = ("vl53l0x", "vl53l1x", "tcs34725", None)
+
+
+@dataclass(frozen=True)
+class SpiPins:
+    sck: int
+    mosi: int
+    miso: int
+    cs: int
+
+
+# The IMU's SPI pins per chassis: the baseline build's, and on the DC build four pins its motor map
+# (manual 2.7: PWM 17 and 11, right encoder 12/13) leaves free.
+ICM45686_SPI = {"st3032": SpiPins(12, 13, 11, 17), "jgb37": SpiPins(4, 5, 6, 21)}
+ICM45686_CS = ICM45686_SPI["st3032"].cs
 
 
 @dataclass
@@ -55,6 +73,12 @@ class Sensors:
     range_finder: object  # the laser ranger: on mux channel 7, or on the bare bus
     bare_0x29: object  # what is wired straight to the bus at 0x29, if anything
     hcsr04: HCSR04Model
+    imu_spi: SpiPins = ICM45686_SPI["st3032"]  # where this chassis wires the ICM-45686
+
+
+def icm45686_spi(chassis_name) -> SpiPins:
+    """The ICM-45686's SPI pins on chassis `chassis_name` (the baseline's for a chassis not listed)."""
+    return ICM45686_SPI.get(chassis_name, ICM45686_SPI["st3032"])
 
 
 def attach_sensors(physics, board, seed: int = 0, range_finder="vl53l0x", bare_0x29=None) -> Sensors:
@@ -101,7 +125,8 @@ def attach_sensors(physics, board, seed: int = 0, range_finder="vl53l0x", bare_0
     bno = BNO055Model(motion, now_us, seed=seed * 101 + 20)
     bus[BNO055_ADDRESS] = bno
     icm = ICM45686Model(motion, now_us, seed=seed * 101 + 21)
-    board.attach_spi(ICM45686_CS, icm)
+    imu_spi = icm45686_spi(physics.chassis.name)
+    board.attach_spi(imu_spi.cs, icm)
 
     sonar = HCSR04Model(sonar_ray(model, data), seed=seed * 101 + 31)
     board.watch_output(HCSR04_TRIG, sonar.trig_driven)
@@ -111,7 +136,7 @@ def attach_sensors(physics, board, seed: int = 0, range_finder="vl53l0x", bare_0
     for pin in qtr.pins:
         board.set_analog(pin, qtr.channel(pin).read)
 
-    return Sensors(colours, mux, qtr, icm, bno, ranger, bare, sonar)
+    return Sensors(colours, mux, qtr, icm, bno, ranger, bare, sonar, imu_spi)
 
 
 def _colour_sites(model) -> int:
