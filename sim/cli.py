@@ -2,7 +2,8 @@
 
     openbricks sim preview [--world W] [--x X] [--y Y] [--yaw DEG] [--headless] [--duration S] [--seed N]
     openbricks sim run SCRIPT [--world W] [--x X] [--y Y] [--yaw DEG] [--viewer] [--no-shim] [--seed N]
-                               [--chassis C] [--speed F] [--duration S] [--json]
+                               [--chassis C] [--speed F] [--duration S] [--json] [--hub-dir DIR]
+                               [--range-finder PART] [--bare-0x29 PART]
 
 Positions follow the manual's simulator chapter: metres on the mat, yaw in degrees counter-clockwise
 from +x (MuJoCo's convention); inside, the simulator works in millimetres with Pybricks' clockwise
@@ -22,6 +23,8 @@ EXIT_OK = 0
 EXIT_FAILED = 1
 WORLD_NAMES = "empty, line_track, zones, arena, wro"  # kept in step with worlds.WORLDS by a test
 CHASSIS_NAMES = ("st3032", "jgb37")
+RANGE_FINDERS = ("vl53l0x", "vl53l1x")  # kept in step with sensors.rig by a test, as WORLD_NAMES
+BARE_0X29_PARTS = ("tcs34725", "vl53l0x", "vl53l1x")
 INSTALL_HINT = (
     "the simulator needs MuJoCo, which comes with the [sim] extra: pipx install 'openbricks[sim]' "
     "(or pip install 'openbricks[sim]')"
@@ -124,6 +127,29 @@ def build_parser() -> argparse.ArgumentParser:
         "--json",
         action="store_true",
         help="Print one JSON object (exit reason, final pose, score, simulated and wall time), not text.",
+    )
+    run.add_argument(
+        "--hub-dir",
+        metavar="DIR",
+        help=(
+            "The hub's flash for this run: the program's files (open('/qtr.cal', 'w')) land in DIR and "
+            "stay for the next run. Default: a fresh temporary flash, removed after the run."
+        ),
+    )
+    run.add_argument(
+        "--range-finder",
+        choices=RANGE_FINDERS,
+        default="vl53l0x",
+        help="The laser range finder on the I2C mux's channel 7. Default: %(default)s.",
+    )
+    run.add_argument(
+        "--bare-0x29",
+        choices=BARE_0X29_PARTS,
+        help=(
+            "Wire this one 0x29 part straight to the I2C bus (SDA 15, SCL 16) with no mux in between, as "
+            "a build with a single colour sensor or range finder has it. Default: every 0x29 part behind "
+            "the mux."
+        ),
     )
     return parser
 
@@ -247,6 +273,9 @@ def _run(args) -> int:
         wall_limit_s=args.wall_limit,
         echo=None if args.json else _echo_to(sys.stdout),
         source=source,
+        hub_dir=args.hub_dir,
+        range_finder=args.range_finder,
+        bare_0x29=args.bare_0x29,
     )
     if args.json:
         print(json.dumps(_summary(result)))
@@ -303,6 +332,8 @@ def _run_unshimmed(args, world, script, source) -> int:
         _start_pose(args, world),
         speed=args.speed,
         limit_ms=int(args.duration * 1000),
+        range_finder=args.range_finder,
+        bare_0x29=args.bare_0x29,
     )
     exit_reason, error = "finished", None
     started = time.perf_counter()

@@ -4,7 +4,9 @@
     print(result.exit, result.pose, result.output)
 
 The program runs unchanged: as `__main__`, with its own globals, importing
-`machine`, `time`, `openbricks...` from the simulator's shim. It ends when
+`machine`, `time`, `openbricks...` from the simulator's shim. Its files are
+the hub's: `open("/qtr.cal", "w")` writes to the run's hub flash (run_flash.py),
+a fresh temporary directory per run unless `hub_dir` names one to keep. It ends when
 it returns, raises, calls sys.exit() or machine.reset(), reaches the
 simulated time limit, exceeds the wall-clock limit (a loop that never lets
 time pass), or is stopped from another thread (request_stop()).
@@ -17,7 +19,6 @@ build on these two entry points.
 
 import _thread
 import argparse
-import builtins
 import io
 import json
 import os
@@ -28,6 +29,8 @@ import traceback
 from dataclasses import asdict, dataclass, field
 
 from .clock import SimStopped, SimTimeLimit
+from .run_flash import RunFlash
+from .sensors.rig import BARE_0X29, RANGE_FINDERS
 from .shim import Shim
 from .simulation import Simulation
 from .worlds import final_state
@@ -38,6 +41,7 @@ TIME_LIMIT = "time_limit"  # simulated time ran out
 WALL_LIMIT = "wall_limit"  # it ran too long on the wall clock without letting simulated time pass
 STOPPED = "stopped"  # stopped from outside (Ctrl-C, a stopped job)
 RESET = "reset"  # machine.reset()
+BARE_PARTS = tuple(part for part in BARE_0X29 if part is not None)  # --bare-0x29 choices
 
 
 @dataclass
@@ -78,10 +82,14 @@ class _Output(io.TextIOBase):
 
 
 class ProgramRun:
-    """One run; request_stop() may be called from another thread while run() executes."""
+    """One run; request_stop() may be called from another thread while run() executes.
 
-    def __init__(self, simulation):
+    `hub_dir` is the hub's flash (its root directory); None gives each run() a fresh temporary one.
+    """
+
+    def __init__(self, simulation, hub_dir=None):
         self.simulation = simulation
+        self.hub_dir = hub_dir
         self._wall_expired = False
 
     def request_stop(self):
@@ -90,7 +98,6 @@ class ProgramRun:
     def run(self, source, filename="main.py", wall_limit_s=None, echo=None, job=None) -> RunResult:
         sim = self.simulation
         code = compile(source, filename, "exec")
-        program_globals = {"__name__": "__main__", "__file__": filename, "__builtins__": builtins}
         output = _Output(echo)
         watchdog = None
         if wall_limit_s is not None:
@@ -100,12 +107,12 @@ class ProgramRun:
         saved_streams = sys.stdout, sys.stderr
         started = time.perf_counter()
         try:
-            with Shim(sim):
+            with Shim(sim), RunFlash(self.hub_dir) as flash:
                 sys.stdout = sys.stderr = output
                 if watchdog is not None:
                     watchdog.start()
                 try:
-                    exec(code, program_globals)
+                    exec(code, flash.program_globals(filename))
                 except SimTimeLimit:
                     exit_reason = TIME_LIMIT
                 except SimStopped:
@@ -163,8 +170,16 @@ def run_program(
     wall_limit_s=None,
     echo=None,
     source=None,
+    hub_dir=None,
+    range_finder="vl53l0x",
+    bare_0x29=None,
 ) -> RunResult:
-    """Run the program file `program` (or `source`, named `program`) and return its RunResult."""
+    """Run the program file `program` (or `source`, named `program`) and return its RunResult.
+
+    hub_dir: the hub's flash directory, kept after the run (None: a temporary one, removed).
+    range_finder, bare_0x29: the sensor rig's parts (sensors/rig.py): "vl53l0x" or "vl53l1x" on the
+    mux; and the one 0x29 part wired straight to the I2C bus without a mux, if any.
+    """
     if source is None:
         with open(program, encoding="utf-8") as f:
             source = f.read()
@@ -176,10 +191,24 @@ def run_program(
         "start_mm_deg": list(start_mm_deg) if start_mm_deg is not None else None,
         "speed": speed,
         "limit_ms": limit_ms,
+        "hub_dir": None if hub_dir is None else os.fspath(hub_dir),
+        "range_finder": range_finder,
+        "bare_0x29": bare_0x29,
     }
-    sim = Simulation(world, chassis, seed, start_mm_deg, speed=speed, limit_ms=limit_ms)
+    sim = Simulation(
+        world,
+        chassis,
+        seed,
+        start_mm_deg,
+        speed=speed,
+        limit_ms=limit_ms,
+        range_finder=range_finder,
+        bare_0x29=bare_0x29,
+    )
     try:
-        return ProgramRun(sim).run(source, os.path.basename(os.fspath(program)), wall_limit_s, echo, job)
+        return ProgramRun(sim, hub_dir).run(
+            source, os.path.basename(os.fspath(program)), wall_limit_s, echo, job
+        )
     finally:
         sim.close()
 
@@ -219,6 +248,23 @@ def main(argv=None) -> int:
     )
     parser.add_argument("--limit-ms", type=int, default=60_000, help="simulated time limit (default: 60000)")
     parser.add_argument("--wall-limit-s", type=float, default=None, help="wall-clock limit")
+    parser.add_argument(
+        "--hub-dir",
+        help="the hub's flash: a directory whose files the program sees at the hub's root, and keeps "
+        "(default: a fresh temporary flash for this run)",
+    )
+    parser.add_argument(
+        "--range-finder",
+        choices=RANGE_FINDERS,
+        default="vl53l0x",
+        help="the laser range finder on the mux's channel 7 (default: vl53l0x)",
+    )
+    parser.add_argument(
+        "--bare-0x29",
+        choices=BARE_PARTS,
+        help="the one 0x29 part wired straight to the I2C bus, with no mux in between "
+        "(a TCS34725 over the left colour site, or the range finder)",
+    )
     parser.add_argument("--json", action="store_true", help="print the result as one JSON object")
     args = parser.parse_args(argv)
     stdout = sys.stdout
@@ -233,6 +279,9 @@ def main(argv=None) -> int:
         args.limit_ms,
         args.wall_limit_s,
         echo,
+        hub_dir=args.hub_dir,
+        range_finder=args.range_finder,
+        bare_0x29=args.bare_0x29,
     )
     if args.json:
         stdout.write(result.to_json() + "\n")

@@ -32,7 +32,10 @@ class Simulation:
         nvs=None,
         wheel_diameter_mm=None,
         axle_track_mm=None,
+        range_finder="vl53l0x",
+        bare_0x29=None,
     ):
+        """`range_finder` and `bare_0x29` choose the sensor rig's parts (see sensors/rig.py)."""
         self.physics = Physics(world, chassis, seed, start_mm_deg, wheel_diameter_mm, axle_track_mm)
         try:
             # A fresh hub: no controllers left over from an earlier run in this process.
@@ -43,7 +46,9 @@ class Simulation:
             self.board = SimBoard(self.clock)
             self.nvs = nvs if nvs is not None else {}
             self.wiring = wire(self.physics, self.board, self.world_process)
-            self.sensors = attach_sensors(self.physics, self.board, seed)
+            self.sensors = attach_sensors(
+                self.physics, self.board, seed, range_finder=range_finder, bare_0x29=bare_0x29
+            )
         except BaseException:
             self.physics.close()
             raise

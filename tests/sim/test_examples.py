@@ -17,7 +17,9 @@ EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 pytestmark = pytest.mark.e2e
 
 
-def run_example(program, tmp_path, world="empty", start=None, limit_ms=60_000):
+def run_example(
+    program, tmp_path, world="empty", start=None, limit_ms=60_000, hub_dir=None, chassis="st3032"
+):
     """`python -m openbricks_sim.run PROGRAM --json` in a fresh process; returns the parsed result."""
     import openbricks_mjcontrol
 
@@ -37,25 +39,18 @@ def run_example(program, tmp_path, world="empty", start=None, limit_ms=60_000):
         world,
         "--limit-ms",
         str(limit_ms),
+        "--chassis",
+        chassis,
     ]
     if start is not None:
         command += ["--start", *(str(v) for v in start)]
+    if hub_dir is not None:
+        command += ["--hub-dir", str(hub_dir)]
     out = subprocess.run(command, capture_output=True, text=True, timeout=300, env=env, cwd=tmp_path)
     assert out.stdout, out.stderr
     result = json.loads(out.stdout.strip().splitlines()[-1])
     assert result["exit"] == "finished", result["error"] or result["output"]
     return result
-
-
-def with_calibration_at(example, path, tmp_path):
-    """A copy of a QTR example that keeps its calibration at `path` instead of the hub's /qtr.cal
-    (the simulated hub's files are the host's files)."""
-    source = (EXAMPLES / example).read_text()
-    original = 'CALIBRATION_PATH = "/qtr.cal"'
-    assert original in source
-    copy = tmp_path / example
-    copy.write_text(source.replace(original, f"CALIBRATION_PATH = {str(path)!r}"))
-    return copy
 
 
 def heading_error_deg(heading, target):
@@ -70,11 +65,11 @@ def test_line_follower_finishes_the_track(tmp_path):
 
 
 def test_qtr_calibrate_sweeps_every_element_and_saves_the_wiring(tmp_path):
-    cal = tmp_path / "qtr.cal"
-    result = run_example(with_calibration_at("qtr_calibrate.py", cal, tmp_path), tmp_path, world="line_track")
+    hub = tmp_path / "hub"
+    result = run_example(EXAMPLES / "qtr_calibrate.py", tmp_path, world="line_track", hub_dir=hub)
     spans = [int(s) for s in re.findall(r"span (\d+)", result["output"])]
     assert len(spans) == 10 and min(spans) > 0.8 * max(spans)
-    record = json.loads(cal.read_text())
+    record = json.loads((hub / "qtr.cal").read_text())  # the hub's /qtr.cal, on the run's flash
     assert record["pins"] == list(range(1, 11))
 
 
@@ -116,12 +111,12 @@ def facing_along_the_align_line(ahead_mm):
 
 
 def test_qtr_align_squares_up_on_the_skewed_line(tmp_path):
-    cal = tmp_path / "qtr.cal"
+    hub = tmp_path / "hub"
     # Calibrate as the example asks (the bar, 70 mm ahead of the axle, over a line the robot faces
-    # along), then align from the world's start, facing across the line.
-    calibrate = with_calibration_at("qtr_calibrate.py", cal, tmp_path)
-    run_example(calibrate, tmp_path, world="zones", start=facing_along_the_align_line(70.0))
-    result = run_example(with_calibration_at("qtr_align.py", cal, tmp_path), tmp_path, world="zones")
+    # along), then align from the world's start, facing across the line: two runs on one hub flash.
+    start = facing_along_the_align_line(70.0)
+    run_example(EXAMPLES / "qtr_calibrate.py", tmp_path, world="zones", start=start, hub_dir=hub)
+    result = run_example(EXAMPLES / "qtr_align.py", tmp_path, world="zones", hub_dir=hub)
     assert heading_error_deg(result["pose"]["heading_deg"], align_line_normal_heading_deg()) < 1.5
 
 
@@ -158,3 +153,13 @@ def test_colour_array_names_the_bands_it_crosses_on_the_way_to_red(tmp_path):
         seen[side].append(name)
     assert seen["left"] == seen["right"] == ["white", "black", "white", "red"]
     assert result["score"] == {"zone": "red"}
+
+
+def test_dc_build_square_closes_on_its_start_and_the_gyro_agrees(tmp_path):
+    result = run_example(EXAMPLES / "esp32_drivebase.py", tmp_path, chassis="jgb37")
+    pose = result["pose"]
+    assert math.hypot(pose["x_mm"], pose["y_mm"]) < 10.0
+    assert heading_error_deg(pose["heading_deg"], 0.0) < 2.0
+    last = re.findall(r"side 4: odometry ([+-][0-9.]+) deg, gyro ([+-][0-9.]+) deg", result["output"])
+    odometry, gyro = (float(v) for v in last[0])
+    assert abs(odometry - 360.0) < 2.0 and abs(gyro - odometry) < 1.0
