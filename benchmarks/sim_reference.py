@@ -3,8 +3,8 @@
 The program is the manual's square example (section 5.1) with more laps, a 60 s-class mission,
 run unchanged by both simulators on their `empty` worlds, headless, each in a process of its own
 started the way a user would start it (`python -m <their sim module> run ...`). The reference lives
-in a throwaway virtualenv created once under the user cache dir (`pip install 'openbricks[sim]==4.36.0'`)
-and is only ever run as a subprocess: nothing of it is imported here.
+in the benchmarks' throwaway virtualenv (benchmarks.reference: `openbricks[sim]==4.36.0`, created once
+under the user cache dir) and is only ever run as a subprocess: nothing of it is imported here.
 
 For each side, best of ROUNDS alternating runs (other processes share the CPU; alternating slows
 both alike):
@@ -37,14 +37,12 @@ from pathlib import Path
 
 from benchmarks import Row
 
-REFERENCE_VERSION = "4.36.0"
-REFERENCE_REQUIREMENT = f"openbricks[sim]=={REFERENCE_VERSION}"
+REFERENCE_VERSION = "4.36.0"  # what benchmarks.reference installs
 LAPS = 6  # about 66 s of simulated time
 TABLE_LAPS = 2  # the reference steps its tables several times slower: keep that run short
-ROUNDS = 3
+ROUNDS = 5
 SIM_LIMIT_S = 300
 RSS_SAMPLE_S = 0.01
-PIP_TIMEOUT_S = 900
 RUN_TIMEOUT_S = 600
 
 OUR_TABLE = "wro"
@@ -115,54 +113,6 @@ class Measured:
         return (
             f"{self.sim_s:.1f} s simulated in {self.wall_s:.2f} s ({self.sim_s / self.wall_s:.0f}x real time)"
         )
-
-
-# --- the reference's throwaway virtualenv ---------------------------------------------------------
-
-
-def reference_venv() -> Path:
-    """The reference's virtualenv, created and installed on first use and kept in the user cache."""
-    from filelock import FileLock
-
-    from openbricks_server.paths import cache_dir
-
-    root = cache_dir() / "reference"
-    root.mkdir(parents=True, exist_ok=True)
-    venv = root / f"openbricks-{REFERENCE_VERSION}"
-    ready = venv / ".installed"
-    with FileLock(str(root / f"openbricks-{REFERENCE_VERSION}.lock")):
-        if not ready.exists():
-            _create_reference_venv(venv)
-            ready.write_text(REFERENCE_REQUIREMENT + "\n", encoding="utf-8")
-    return venv
-
-
-def _create_reference_venv(venv: Path) -> None:
-    print(f"  (one-time set-up: installing {REFERENCE_REQUIREMENT} into {venv})", file=sys.stderr, flush=True)
-    python = venv / "bin" / "python"
-    steps = [
-        [sys.executable, "-m", "venv", "--clear", str(venv)],
-        [
-            str(python),
-            "-m",
-            "pip",
-            "install",
-            "--quiet",
-            "--disable-pip-version-check",
-            REFERENCE_REQUIREMENT,
-        ],
-        [str(python), "-c", "import openbricks_sim"],
-    ]
-    for command in steps:
-        done = subprocess.run(
-            command, capture_output=True, text=True, timeout=PIP_TIMEOUT_S, env=_clean_env(), cwd=venv.parent
-        )
-        if done.returncode != 0:
-            raise RuntimeError(
-                f"setting up the reference simulator failed at `{' '.join(command)}` "
-                f"(exit {done.returncode}):\n{_tail(done.stdout + done.stderr)}\n"
-                f"Delete {venv} to start over."
-            )
 
 
 # --- one process, measured --------------------------------------------------------------------------
@@ -241,10 +191,11 @@ def run_ours(program: Path, world: str) -> Measured:
 
 
 def run_reference(program: Path, world: str) -> Measured:
-    venv = reference_venv()
+    from benchmarks import reference
+
     trace = program.parent / "trace.csv"
     command = [
-        str(venv / "bin" / "python"),
+        str(reference.python()),
         "-m",
         "openbricks_sim",
         "run",
