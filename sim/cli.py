@@ -202,7 +202,10 @@ def _viewer_launcher():
     """The viewer's entry point, or None while the viewer has not been built."""
     if importlib.util.find_spec("openbricks_sim.viewer") is None:
         return None
-    viewer = importlib.import_module("openbricks_sim.viewer")
+    try:
+        viewer = importlib.import_module("openbricks_sim.viewer")
+    except ImportError as exc:  # viser or mjviser missing: the message says how to install them
+        raise SimCliError(str(exc)) from None
     return getattr(viewer, "launch", None)
 
 
@@ -260,6 +263,8 @@ def _run(args) -> int:
     world = _world(args.world)
     if args.no_shim:
         return _run_unshimmed(args, world, script, source)
+    if args.viewer:
+        return _run_with_viewer(args, world, script, source)
     from openbricks_sim.run import FINISHED, TIME_LIMIT, run_program
 
     result = run_program(
@@ -280,17 +285,49 @@ def _run(args) -> int:
     if args.json:
         print(json.dumps(_summary(result)))
     else:
-        if result.error:
-            sys.stderr.write(result.error if result.error.endswith("\n") else result.error + "\n")
-        pose = result.pose
-        print(
-            f"[{result.exit}] {result.sim_ms / 1000:.3f} s simulated in {result.wall_s:.2f} s "
-            f"({result.real_time_factor}x real time); robot at x={pose['x_mm']:.1f} mm "
-            f"y={pose['y_mm']:.1f} mm heading={pose['heading_deg']:.2f} deg",
-            file=sys.stderr,
-        )
-        if result.score is not None:
-            print(f"score: {json.dumps(result.score)}", file=sys.stderr)
+        _report(result)
+    return EXIT_OK if result.exit in (FINISHED, TIME_LIMIT) else EXIT_FAILED
+
+
+def _report(result) -> None:
+    """How the run ended, on stderr (stdout carries the program's own output)."""
+    if result.error:
+        sys.stderr.write(result.error if result.error.endswith("\n") else result.error + "\n")
+    pose = result.pose
+    print(
+        f"[{result.exit}] {result.sim_ms / 1000:.3f} s simulated in {result.wall_s:.2f} s "
+        f"({result.real_time_factor}x real time); robot at x={pose['x_mm']:.1f} mm "
+        f"y={pose['y_mm']:.1f} mm heading={pose['heading_deg']:.2f} deg",
+        file=sys.stderr,
+    )
+    if result.score is not None:
+        print(f"score: {json.dumps(result.score)}", file=sys.stderr)
+
+
+def _run_with_viewer(args, world, script, source) -> int:
+    """--viewer: the run in the browser's 3D view, paced at --speed (real time unless given); the page
+    can pause, change speed, stop and restart it; Ctrl-C ends the session."""
+    from openbricks_sim.run import FINISHED, TIME_LIMIT
+    from openbricks_sim.viewer import print_url, serve_run
+
+    result = serve_run(
+        str(script),
+        world=args.world,
+        chassis=args.chassis,
+        seed=args.seed,
+        start_mm_deg=_start_pose(args, world),
+        speed=1.0 if args.speed is None else args.speed,
+        limit_ms=int(round(args.duration * 1000)),
+        echo=None if args.json else _echo_to(sys.stdout),
+        source=source,
+        on_ready=print_url,
+        on_result=None if args.json else _report,
+        hub_dir=args.hub_dir,
+        range_finder=args.range_finder,
+        bare_0x29=args.bare_0x29,
+    )
+    if args.json:
+        print(json.dumps(_summary(result)))
     return EXIT_OK if result.exit in (FINISHED, TIME_LIMIT) else EXIT_FAILED
 
 

@@ -4,7 +4,8 @@
     serve_run("square.py", world="wro", port=8080, on_ready=print)   # what `sim run --viewer` does
 
 `SimViewer` is the reusable part (one server, one simulation at a time, any number of browsers);
-`serve_run` is the command-line session around it. Needs the `sim` extra (viser, mjviser).
+`serve_run` (sim run --viewer) and `launch` (sim preview) are the command-line sessions around it.
+Needs the `sim` extra (viser, mjviser).
 """
 
 try:
@@ -16,7 +17,7 @@ except ImportError as exc:  # pragma: no cover - depends on the installation
         "pip install 'openbricks[sim]'"
     ) from exc
 
-from .session import print_url, serve_run
+from .session import launch, print_url, serve_run
 from .viewer import DEFAULT_HOST, DEFAULT_PORT, RemoteBindError, SimViewer
 
-__all__ = ["DEFAULT_HOST", "DEFAULT_PORT", "RemoteBindError", "SimViewer", "print_url", "serve_run"]
+__all__ = ["DEFAULT_HOST", "DEFAULT_PORT", "RemoteBindError", "SimViewer", "launch", "print_url", "serve_run"]

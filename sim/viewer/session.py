@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import os
 import sys
+import time
 from collections.abc import Callable
 
 from ..run import STOPPED, ProgramRun, RunResult
@@ -32,6 +33,9 @@ def serve_run(
     keep_open: bool = True,
     on_ready: Callable[[str], object] | None = None,
     on_result: Callable[[RunResult], object] | None = None,
+    hub_dir=None,
+    range_finder: str = "vl53l0x",
+    bare_0x29: str | None = None,
 ) -> RunResult:
     """Run `program` (a file, or `source` named `program`) with the 3D view served at host:port.
 
@@ -39,6 +43,7 @@ def serve_run(
     echo: where the program's output also goes (the terminal). on_ready(url) is called once the page
     can be opened; on_result(result) after every run. With keep_open=False the session ends with the
     first run; otherwise it ends on Ctrl-C (in the terminal), returning the last run's result.
+    hub_dir, range_finder, bare_0x29: as for run_program (the hub's flash, the sensor rig's parts).
 
     No wall-clock limit applies: a paused or slowed run is meant to take long, and the page's Stop
     button ends a program that never lets simulated time pass.
@@ -55,7 +60,19 @@ def serve_run(
         "start_mm_deg": list(start_mm_deg) if start_mm_deg is not None else None,
         "speed": speed,
         "limit_ms": limit_ms,
+        "hub_dir": None if hub_dir is None else os.fspath(hub_dir),
+        "range_finder": range_finder,
+        "bare_0x29": bare_0x29,
         "viewer": True,
+    }
+    setup = {
+        "world": world,
+        "chassis": chassis,
+        "seed": seed,
+        "start_mm_deg": start_mm_deg,
+        "limit_ms": limit_ms,
+        "range_finder": range_finder,
+        "bare_0x29": bare_0x29,
     }
     with SimViewer(host, port, speed=speed) as viewer:
         if on_ready is not None:
@@ -67,9 +84,7 @@ def serve_run(
                 echo(text)
 
         while True:
-            result = _one_run(
-                viewer, source, filename, (world, chassis, seed, start_mm_deg, limit_ms), tee, job
-            )
+            result = _one_run(viewer, source, filename, setup, hub_dir, tee, job)
             if on_result is not None:
                 on_result(result)
             if viewer.restart_requested.is_set():
@@ -86,12 +101,11 @@ def serve_run(
             viewer.output.clear()
 
 
-def _one_run(viewer, source, filename, setup, echo, job) -> RunResult:
-    world, chassis, seed, start_mm_deg, limit_ms = setup
-    simulation = Simulation(world, chassis, seed, start_mm_deg, speed=None, limit_ms=limit_ms)
+def _one_run(viewer, source, filename, setup, hub_dir, echo, job) -> RunResult:
+    simulation = Simulation(speed=None, **setup)
     result = None
     try:
-        run = ProgramRun(simulation)
+        run = ProgramRun(simulation, hub_dir)
         viewer.attach(simulation, stop=run.request_stop)
         try:
             result = run.run(source, filename, None, echo, job)
@@ -100,6 +114,34 @@ def _one_run(viewer, source, filename, setup, echo, job) -> RunResult:
     finally:
         simulation.close()
     return result
+
+
+def launch(
+    world="empty",
+    chassis: str = "st3032",
+    seed: int = 0,
+    start_mm_deg=None,
+    host: str = DEFAULT_HOST,
+    port: int = DEFAULT_PORT,
+    on_ready: Callable[[str], object] | None = None,
+) -> int:
+    """`openbricks sim preview`: the world with the robot standing at its start, served until Ctrl-C.
+
+    world is an alias, an MJCF path or a World. Returns the command's exit status (0).
+    """
+    announce = print_url if on_ready is None else on_ready
+    simulation = Simulation(world, chassis, seed, start_mm_deg)
+    try:
+        with SimViewer(host, port, controls=False) as viewer:
+            viewer.show_still(simulation, "preview")
+            announce(viewer.url)
+            try:
+                while True:
+                    time.sleep(0.5)
+            except KeyboardInterrupt:
+                return 0
+    finally:
+        simulation.close()
 
 
 def print_url(url: str) -> None:

@@ -152,11 +152,7 @@ class SimViewer:
             if clock.speed is not None:
                 self._speed = clock.speed
                 clock.speed = None
-            model = simulation.physics.model
-            fingerprint = model_fingerprint(model)
-            if self._mirror is None or fingerprint != self._fingerprint:
-                self._build_scene(model)
-                self._fingerprint = fingerprint
+            self._ensure_scene(simulation.physics.model)
             self._simulation = simulation
             self._stop_run = stop
             self._run_thread = threading.current_thread()
@@ -169,6 +165,15 @@ class SimViewer:
             self._state = RUNNING
             self._pacer = Pacer(clock, self._on_pacer_frame, speed=self._speed, frame_hz=self._frame_hz)
             self._pacer.start()
+
+    def show_still(self, simulation, state: str) -> None:
+        """Show `simulation` as it is now, with no run attached (a preview of a world)."""
+        with self._lock:
+            if self._simulation is not None:
+                raise RuntimeError("the viewer is showing a run: detach() it first")
+            self._ensure_scene(simulation.physics.model)
+            self._frame = capture(simulation)
+            self._state = state
 
     def detach(self, result=None) -> None:
         """The run is over: show where it ended and how (`result`: its RunResult)."""
@@ -262,6 +267,13 @@ class SimViewer:
         self.close()
 
     # --- internals ----------------------------------------------------------------------------------
+
+    def _ensure_scene(self, model) -> None:
+        """Build the scene for `model`, unless the one on show already draws the same world."""
+        fingerprint = model_fingerprint(model)
+        if self._mirror is None or fingerprint != self._fingerprint:
+            self._build_scene(model)
+            self._fingerprint = fingerprint
 
     def _build_scene(self, model) -> None:
         with self._scene_lock:
