@@ -29,7 +29,7 @@ import traceback
 from dataclasses import asdict, dataclass, field
 
 from .clock import SimStopped, SimTimeLimit
-from .run_flash import RunFlash
+from .run_flash import HubDirError, RunFlash, prepare_hub_dir
 from .sensors.rig import BARE_0X29, RANGE_FINDERS
 from .shim import Shim
 from .simulation import Simulation
@@ -89,7 +89,7 @@ class ProgramRun:
 
     def __init__(self, simulation, hub_dir=None):
         self.simulation = simulation
-        self.hub_dir = hub_dir
+        self.hub_dir = prepare_hub_dir(hub_dir)
         self._wall_expired = False
 
     def request_stop(self):
@@ -183,6 +183,7 @@ def run_program(
     if source is None:
         with open(program, encoding="utf-8") as f:
             source = f.read()
+    hub_dir = prepare_hub_dir(hub_dir)
     job = {
         "program": os.fspath(program),
         "world": world,
@@ -191,7 +192,7 @@ def run_program(
         "start_mm_deg": list(start_mm_deg) if start_mm_deg is not None else None,
         "speed": speed,
         "limit_ms": limit_ms,
-        "hub_dir": None if hub_dir is None else os.fspath(hub_dir),
+        "hub_dir": hub_dir,
         "range_finder": range_finder,
         "bare_0x29": bare_0x29,
     }
@@ -269,6 +270,10 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
     stdout = sys.stdout
     echo = None if args.json else stdout.write
+    try:
+        prepare_hub_dir(args.hub_dir)
+    except HubDirError as exc:
+        parser.error(str(exc))
     result = run_program(
         args.program,
         args.world,

@@ -29,11 +29,32 @@ from .virtual_hub.hub_python import HubPython
 MACHINE = "openbricks simulator with ESP32S3"
 
 
+class HubDirError(ValueError):
+    """The hub directory given for a run cannot hold a flash."""
+
+
+def prepare_hub_dir(hub_dir):
+    """Create `hub_dir` if missing; HubDirError naming the path and the fix if it cannot be a flash.
+
+    Called before a run is set up, so a typo fails in one line instead of a traceback mid-run.
+    """
+    if hub_dir is None:
+        return None
+    path = os.fspath(hub_dir)
+    if os.path.exists(path) and not os.path.isdir(path):
+        raise HubDirError(f"hub directory {path} is a file: give a directory for the hub's flash")
+    try:
+        os.makedirs(path, exist_ok=True)
+    except OSError as exc:
+        raise HubDirError(f"cannot use {path} as the hub's flash: {exc.strerror or exc}") from None
+    return path
+
+
 class RunFlash:
     """The hub flash and hub Python of one program run (a context manager, entered after the Shim)."""
 
     def __init__(self, hub_dir=None):
-        self.hub_dir = None if hub_dir is None else os.fspath(hub_dir)
+        self.hub_dir = prepare_hub_dir(hub_dir)
         self.fs = None
         self.python = None
         self._temporary = None

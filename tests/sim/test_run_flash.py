@@ -120,3 +120,22 @@ def test_the_module_entry_point_takes_a_hub_dir(tmp_path):
     assert out.returncode == 0, out.stderr
     assert json.loads(out.stdout)["exit"] == FINISHED
     assert (tmp_path / "flash" / "from_cli.txt").read_text() == "kept"
+
+
+def test_a_hub_dir_that_is_a_file_is_refused_before_the_run_with_the_path(tmp_path, capsys):
+    from openbricks_sim import cli
+    from openbricks_sim.run_flash import HubDirError
+
+    not_a_dir = tmp_path / "notes.txt"
+    not_a_dir.write_text("")
+    with pytest.raises(HubDirError, match=f"hub directory {not_a_dir} is a file"):
+        run("print('never runs')\n", hub_dir=not_a_dir)
+    script = tmp_path / "mission.py"
+    script.write_text("print('never runs')\n")
+    assert cli.main(["run", str(script), "--hub-dir", str(not_a_dir)]) == cli.EXIT_FAILED
+    captured = capsys.readouterr()
+    assert captured.err == (
+        f"openbricks sim run: error: hub directory {not_a_dir} is a file: "
+        "give a directory for the hub's flash\n"
+    )
+    assert "never runs" not in captured.out
