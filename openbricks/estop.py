@@ -48,8 +48,22 @@ def engage(why="stop button"):
     """
     _state["engaged"] = True
     _state["reason"] = why
+    return _run(_halts)
+
+
+def halt_since(keep):
+    """Halt the motors registered after `mark()` returned `keep`, without setting the latch.
+
+    The launcher calls this when a program ends, however it ends: a motor the program left running
+    (or was driving when it raised) must not keep the robot moving once nothing controls it.
+    Returns the failures as (halt, exception) pairs, like `engage()`.
+    """
+    return _run(_halts[keep:])
+
+
+def _run(halts):
     failures = []
-    for halt in tuple(_halts):
+    for halt in tuple(halts):
         try:
             halt()
         except Exception as exc:  # noqa: BLE001 - one failed motor must not spare the rest

@@ -26,6 +26,10 @@ MicroPython scheduler, between the main thread's bytecodes. That has two consequ
   inline in the main thread (the simulator's virtual clock, the test fakes); on such a firmware the
   e-stop latch is what ends the program, at its next wait() or motion command.
 
+Every run ends the same way, whatever ended it: the motors its drivers registered with the e-stop
+are halted, drive bases give their serial-bus wheels back to the engine, servo buses close and the
+native scheduler forgets the program's controllers, so the next run starts from a clean hub.
+
 Log framing, one stamped line each, committed immediately:
 `started: <trigger> | firmware <label> | program <path> | uptime N ms | free N B`,
 `button pressed -> stop`, `estop engaged`, then one of `stopped: finished after N ms`,
@@ -133,6 +137,36 @@ def _native_wipe():
     reset = getattr(process, "reset", None)
     if reset is not None:
         reset()
+
+
+def _release_program_hardware(halts):
+    """Put the hardware a finished program drove back in the state the next program expects.
+
+    Its motors are halted (a run that ended or failed mid-drive must not leave the robot moving),
+    serial-bus wheels adopted by its drive bases go back to their engine, its servo buses close
+    (UART and pins free, so the next program can wire the bus its own way and adopt the wheels
+    again), and its controllers leave the native scheduler. Only modules the program imported are
+    touched. Returns the lines worth a note in the run log; never raises.
+    """
+    notes = []
+    for _halt, exc in estop.halt_since(halts):
+        notes.append("a motor halt at the end of the run failed: " + _exception_line(exc))
+    for name, action in (
+        ("openbricks.robotics.wheels", "release_ports"),
+        ("openbricks.drivers.st3215", "forget_buses"),
+    ):
+        module = sys.modules.get(name)
+        if module is None:
+            continue
+        try:
+            getattr(module, action)()
+        except Exception as exc:  # noqa: BLE001 - the hub must keep serving the button
+            notes.append("%s.%s() failed at the end of the run: %s" % (name, action, _exception_line(exc)))
+    try:
+        _native_wipe()
+    except Exception as exc:  # noqa: BLE001
+        notes.append("native scheduler reset failed: " + _exception_line(exc))
+    return notes
 
 
 def traceback_text(exc):
@@ -252,6 +286,7 @@ class Launcher:
         self._last_attempt_ms = None
         self._stop_retries = 0
         self._last_tick_ms = None
+        self._halts_mark = None  # estop.mark() of the running program, until its hardware is released
 
     # -- the watcher (timer callback context) ------------------------------------------------
 
@@ -383,29 +418,33 @@ class Launcher:
                 % (trigger, openbricks.firmware_label(), path, self._started_ms, free)
             )
             self._stop_pressed_ms = None
+            self._halts_mark = halts
             _set_running(True)
             try:
                 _execute(path)
                 outcome = "finished"
                 _set_running(False)
+                self._wind_down()
                 log.write_text("stopped: finished after %d ms" % self._elapsed_ms())
             except KeyboardInterrupt as exc:
                 outcome = "stopped"
                 interrupted = exc
                 _set_running(False)
+                self._wind_down()
                 log.write_text("stopped: KeyboardInterrupt (%s)" % self._stop_story())
             except BaseException as exc:  # noqa: BLE001 - SystemExit too: the run ends, the hub lives on
                 outcome = "error"
                 _set_running(False)
+                self._wind_down()  # before the traceback: printing it over BLE takes a while
                 text = traceback_text(exc)
                 log.console_print(text, end="")
                 log.write_text(text)
                 log.write_text("stopped: %s after %d ms" % (_exception_line(exc), self._elapsed_ms()))
             finally:
                 _set_running(False)
+                self._wind_down()  # if an interrupt landed before a branch above got to it
                 estop.clear(halts)
                 pins.release_since(claims)
-                _native_wipe()
                 if self._stop_pressed_ms is not None:
                     self._lockout_until_ms = time.ticks_add(time.ticks_ms(), START_LOCKOUT_MS)
                 self._stop_pressed_ms = None
@@ -414,6 +453,15 @@ class Launcher:
         if interrupted is not None and reraise_interrupt:
             raise interrupted
         return outcome
+
+    def _wind_down(self):
+        """Release the finished program's hardware once per run, noting failures in its log."""
+        halts = self._halts_mark
+        if halts is None:
+            return
+        self._halts_mark = None
+        for line in _release_program_hardware(halts):
+            log.write_text(line)
 
     def _elapsed_ms(self):
         return time.ticks_diff(time.ticks_ms(), self._started_ms)

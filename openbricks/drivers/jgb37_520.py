@@ -15,6 +15,7 @@ angle work on a build without the native core; closed-loop ones need it.
 
 import time
 
+from openbricks import estop
 from openbricks.drivers.encoder import make_encoder
 from openbricks.drivers.l298n import L298NMotor
 from openbricks.interfaces import Motor
@@ -71,6 +72,7 @@ class JGB37Motor(Motor):
             self._bridge.close()
             raise
         self._servo = self._make_servo(kp)
+        estop.on_engage(self.coast)  # through the core, or its next tick would drive the bridge again
 
     def _make_encoder(self, pin_a, pin_b, invert):
         return make_encoder(
@@ -104,7 +106,7 @@ class JGB37Motor(Motor):
         if duty_pct == 0:
             self._bridge.brake()
         else:
-            self._bridge.dc(duty_pct)
+            self._bridge._drive(duty_pct)
 
     def _native(self, method):
         servo = self._servo
@@ -123,6 +125,7 @@ class JGB37Motor(Motor):
 
     def dc(self, duty):
         """Fixed duty -100..100, open loop (Pybricks Motor.dc). Non-blocking."""
+        estop.check("%s dc()" % type(self).__name__)
         duty = max(-100, min(100, duty))
         if self._servo is not None:
             self._servo.dc(duty)  # the core must know, or its next tick would overwrite the duty
@@ -166,6 +169,7 @@ class JGB37Motor(Motor):
 
     def run_speed(self, deg_per_s):
         """Hold `deg_per_s`, ramped at the core's acceleration (closed loop)."""
+        estop.check("%s run_speed()" % type(self).__name__)
         self._native("run_speed").run_speed(deg_per_s)
 
     def run_angle(self, deg_per_s, target_angle, wait=True, accel_dps2=1500.0, then=Stop.COAST):
@@ -174,6 +178,7 @@ class JGB37Motor(Motor):
         The core samples the profile at 1 kHz; with wait=False poll done().
         """
         name = then_name(then)
+        estop.check("%s run_angle()" % type(self).__name__)
         if deg_per_s == 0:
             raise ValueError("run_angle(deg_per_s=0): the move would never finish; give a non-zero speed")
         servo = self._native("run_angle")
@@ -185,6 +190,7 @@ class JGB37Motor(Motor):
     def run_target(self, speed, target_angle, then=Stop.HOLD, wait=True):
         """Run to the absolute `target_angle` (reset_angle frame), planned by the core from its reference."""
         name = then_name(then)
+        estop.check("%s run_target()" % type(self).__name__)
         if speed == 0:
             raise ValueError("run_target(speed=0): the move would never finish; give a non-zero speed")
         servo = self._native("run_target")
@@ -208,6 +214,7 @@ class JGB37Motor(Motor):
 
     def close(self):
         """Stop ticking, release the bridge and the encoder pins."""
+        estop.remove(self.coast)
         if self._servo is not None:
             import _openbricks_native
 

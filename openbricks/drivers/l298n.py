@@ -13,6 +13,7 @@ encoder to the same bridge channel).
 
 from micropython import const
 
+from openbricks import estop
 from openbricks.drivers import claim_pins, release_pins
 from openbricks.interfaces import Motor
 
@@ -42,9 +43,18 @@ class L298NMotor(Motor):
         self._in2 = Pin(in2, Pin.OUT, value=0)
         self._pwm = PWM(Pin(pwm, Pin.OUT), freq=pwm_freq, duty_u16=0)
         self._duty = 0
+        estop.on_engage(self.coast)  # the stop button frees the bridge at once
 
     def dc(self, duty):
-        """Fixed duty -100..100 (sign = direction, after invert). 0 releases the motor like coast()."""
+        """Fixed duty -100..100 (sign = direction, after invert). 0 releases the motor like coast().
+
+        Refused (EStopError) while the e-stop is engaged.
+        """
+        estop.check("%s dc()" % self.CHIP)
+        self._drive(duty)
+
+    def _drive(self, duty):
+        """dc() without the e-stop check: for a controller's own output path (its tick must not raise)."""
         duty = max(-100, min(100, duty))
         if self.invert:
             duty = -duty
@@ -73,5 +83,6 @@ class L298NMotor(Motor):
     def close(self):
         """Release the bridge and hand its pins back."""
         self.coast()
+        estop.remove(self.coast)
         self._pwm.deinit()
         release_pins(self, self._pins)

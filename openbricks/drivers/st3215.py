@@ -22,7 +22,7 @@ import time
 
 from micropython import const
 
-from openbricks import pins
+from openbricks import estop, pins
 from openbricks.interfaces import Motor, Servo
 from openbricks.parameters import Stop, then_name
 
@@ -381,6 +381,7 @@ class ST3215(_BusServo, Servo):
         self._attach(servo_id, uart_id, tx, rx, baud, dir_pin)
         self._write(_REG_MIN_ANGLE, bytes((min_raw & 0xFF, min_raw >> 8, max_raw & 0xFF, max_raw >> 8)))
         self._write(_REG_MODE, b"\x00")
+        estop.on_engage(self.coast)
 
     def _raw_for(self, angle_deg):
         return int(round(self.min_raw + angle_deg * (self.max_raw - self.min_raw) / self.range_deg))
@@ -396,6 +397,7 @@ class ST3215(_BusServo, Servo):
                 "move_to(%r): outside this servo's range 0..%r degrees (min_raw=%d, max_raw=%d)"
                 % (angle_deg, self.range_deg, self.min_raw, self.max_raw)
             )
+        estop.check("%s move_to()" % type(self).__name__)
         raw_speed = 0 if speed is None else max(0, min(32767, int(speed)))
         self._write(_REG_TORQUE_ENABLE, b"\x01")
         goal = self._raw_for(angle_deg)
@@ -509,6 +511,7 @@ class ST3215Motor(_BusServo, Motor):
         self._write(_REG_GOAL_SPEED, b"\x00\x00")
         self._mode = None
         self._enter_mode(_MODE_WHEEL)
+        estop.on_engage(self.coast)  # torque off: instant, not ramped like brake()
 
     # --- adoption by a DriveBase -------------------------------------------------
 
@@ -660,7 +663,11 @@ class ST3215Motor(_BusServo, Motor):
     def run_speed(self, deg_per_s):
         """Spin at `deg_per_s` (clamped to max_dps) on the servo's velocity loop, ramped at accel_dps2."""
         if self._port is not None:
-            return self._port.run_speed(self.slot, deg_per_s)
+            return self._port.run_speed(self.slot, deg_per_s)  # the port refuses during an e-stop
+        estop.check("%s run_speed()" % type(self).__name__)
+        self._wheel_speed(deg_per_s)
+
+    def _wheel_speed(self, deg_per_s):
         self._move = None
         self._write(_REG_GOAL_SPEED, self._speed_command(deg_per_s))
         self._prepare_wheel()
@@ -673,7 +680,7 @@ class ST3215Motor(_BusServo, Motor):
         """Ramp to zero speed at accel_dps2 and hold zero rate (torque stays on)."""
         if self._port is not None:
             return self._port.brake(self.slot)
-        self.run_speed(0)
+        self._wheel_speed(0)  # a stop, so allowed while the e-stop is engaged
 
     def coast(self):
         """Torque off: the shaft free-wheels. Instant (not ramped)."""
@@ -703,6 +710,7 @@ class ST3215Motor(_BusServo, Motor):
         """Raw duty -100..100 on the servo's open-loop mode: no speed regulation, speed sags with load."""
         if self._port is not None:
             return self._port.dc(self.slot, duty)
+        estop.check("%s dc()" % type(self).__name__)
         self._move = None
         duty = max(-100, min(100, duty)) * self._sign
         raw = _sign_magnitude(duty * 10, 10)
@@ -749,6 +757,7 @@ class ST3215Motor(_BusServo, Motor):
         name = then_name(then)
         if self._port is not None:
             return self._port.run_angle(self.slot, deg_per_s, target_angle, wait, name)
+        estop.check("%s run_angle()" % type(self).__name__)
         speed_dps = min(abs(deg_per_s), self.max_dps)
         if speed_dps == 0:
             raise ValueError("run_angle(deg_per_s=0): the move would never finish; give a non-zero speed")
@@ -797,7 +806,7 @@ class ST3215Motor(_BusServo, Motor):
                 return False
             self._move = None
             if move.then == Stop.NONE:
-                self.run_speed(move.speed_dps)
+                self._wheel_speed(move.speed_dps)
             elif move.then != Stop.HOLD:  # step mode is already holding the target
                 self._finish(move.then)
             return True
@@ -847,6 +856,7 @@ class SyncServoGroup:
         """Write each servo's goal speed (its own invert / steps_per_dps / max_dps applied) in one packet."""
         if len(speeds_dps) != len(self.servos):
             raise ValueError("%d speeds for %d servos" % (len(speeds_dps), len(self.servos)))
+        estop.check("SyncServoGroup.set_goal_speeds()")
         items = []
         for i, servo in enumerate(self.servos):
             if not hasattr(servo, "_encode_goal_speed"):

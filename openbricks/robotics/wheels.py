@@ -215,6 +215,20 @@ class SerialBusPair(_Pair):
         return native_error
 
 
+def release_ports():
+    """Hand every adopted slot back to its engine and forget the ports and drive-base drivers.
+
+    The launcher calls this when a program ends: the motors and controllers those records point at
+    belong to the finished program, and the next one adopts its own wheels again (a stale port would
+    refuse them, and a stale driver would be "stopped" through motors that no longer exist).
+    """
+    ports = tuple(_ports.values())
+    _ports.clear()
+    _drivers.clear()
+    for port in ports:
+        port.release_all()
+
+
 def _adopt(motor, serial_bus):
     """(port, slot) of `motor` on its bus' engine, handing the UART over on first use."""
     bus = motor.bus

@@ -305,3 +305,74 @@ def test_a_starved_watcher_tick_leaves_a_note_naming_the_gap():
         assert "(slowest log write " in notes[0]
     finally:
         tmpdir.remove(directory)
+
+
+_RUNAWAY_MOTOR = (
+    "import time\n"
+    "import machine\n"
+    "from openbricks.drivers.l298n import L298NMotor\n"
+    "motor = L298NMotor(in1=1, in2=2, pwm=17)\n"
+    "motor.dc(60)\n"
+)
+
+
+def test_a_motor_left_running_is_halted_when_the_program_ends_or_fails():
+    directory = tmpdir.make()
+    try:
+        hub = _hub(directory, _RUNAWAY_MOTOR + "print('driving', machine.board.pwms[17].duty_u16() > 0)\n")
+        assert hub.run_program() == "finished"
+        assert "driving True" in _log_lines(directory)
+        assert machine.board.pwms[17].duty_u16() == 0  # no robot drives off the table after its program
+        _stage(directory, _RUNAWAY_MOTOR + "print(1 // 0)\n")
+        assert hub.run_program() == "error"
+        assert machine.board.pwms[17].duty_u16() == 0
+    finally:
+        tmpdir.remove(directory)
+
+
+def test_the_stop_press_halts_motors_at_once_and_refuses_new_motion():
+    directory = tmpdir.make()
+    try:
+        source = _RUNAWAY_MOTOR + (
+            "try:\n"
+            "    while True:\n"
+            "        time.sleep_ms(10)\n"
+            "except KeyboardInterrupt:\n"
+            "    print('duty after the press', machine.board.pwms[17].duty_u16())\n"
+            "    try:\n"
+            "        motor.dc(60)\n"
+            "    except KeyboardInterrupt as refusal:\n"
+            "        print('refused:', refusal)\n"
+            "    print('duty after a new command', machine.board.pwms[17].duty_u16())\n"
+        )
+        hub = _hub(directory, source)
+        _press(100)
+        _press(1000)
+        hub.idle(2000)
+        lines = _log_lines(directory)
+        assert "duty after the press 0" in lines
+        refusals = [line for line in lines if line.startswith("refused: ")]
+        assert len(refusals) == 1 and "dc() refused: e-stop engaged (program button)" in refusals[0]
+        assert "duty after a new command 0" in lines
+    finally:
+        tmpdir.remove(directory)
+
+
+def test_the_next_program_can_rewire_the_servo_bus_the_last_one_used():
+    from fakes.scs_servo import FakeServo, ScsBus
+
+    directory = tmpdir.make()
+    try:
+        bus = ScsBus()
+        bus.add(FakeServo(1))
+        machine.board.attach_uart(1, bus)
+        motor = "from openbricks.drivers.st3032 import ST3032Motor\nST3032Motor(servo_id=1, rx=%d)\n"
+        hub = _hub(directory, motor % 41)
+        assert hub.run_program() == "finished"
+        # The adapter moved to the old RX pin (the manual's 2.5 wiring): the finished program's bus
+        # must not hold UART1 to its wiring.
+        _stage(directory, motor % 6)
+        assert hub.run_program() == "finished", "\n".join(_log_lines(directory))
+        assert pins.owner_of(41) is None and pins.owner_of(6) is None
+    finally:
+        tmpdir.remove(directory)
