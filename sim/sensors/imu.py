@@ -15,7 +15,10 @@ sensor data 0x00-0x0B (accel x, y, z then gyro x, y, z, little-endian int16;
 ACCEL_CONFIG0 0x1B / GYRO_CONFIG0 0x1C (full scale in bits 6:4), WHO_AM_I
 0x72 = 0xE9, REG_MISC2 0x7F bit 1 soft reset (registers unusable for 1 ms).
 The gyro carries a seeded constant bias (the one the driver learns at rest)
-and white noise.
+and white noise. Its rates are the body's average rate since the previous
+read, as the chip's output filter delivers them: the samples integrate to the
+rotation the body really made, however the read rate beats against the
+motion (an instantaneous rate aliases when the gyro closes a heading loop).
 
 BNO055 (I2C, page 0): CHIP_ID 0xA0, OPR_MODE 0x3D (CONFIG 0x00; the fusion
 outputs read zero until a fusion mode has run 7 ms), Euler heading / roll /
@@ -59,6 +62,12 @@ class BodyMotion:
         """(x, y, z) body-frame angular rate, right-handed (z positive counter-clockwise from above)."""
         return np.degrees(self.data.qvel[self._dof + 3 : self._dof + 6])
 
+    def rotation_since_deg(self, earlier_quat: np.ndarray) -> np.ndarray:
+        """The body-frame rotation vector (degrees) from attitude `earlier_quat` to now."""
+        rotation = np.zeros(3)
+        mujoco.mju_subQuat(rotation, self.quat(), earlier_quat)
+        return np.degrees(rotation)
+
     def specific_force_ms2(self) -> np.ndarray:
         """What an accelerometer reads, in the body frame: acceleration minus gravity."""
         accel_world = self.data.qacc[self._dof : self._dof + 3] - self._gravity
@@ -84,6 +93,7 @@ class ICM45686Model:
     GYRO_FS_DPS = (4000.0, 2000.0, 1000.0, 500.0, 250.0, 125.0, 62.5, 31.25, 15.625)
     ACCEL_FS_G = (32.0, 16.0, 8.0, 4.0, 2.0)
     NO_DATA = -32768
+    MIN_SAMPLE_US = 500  # the output data rate's period at the driver's fastest setting (2 kHz)
 
     def __init__(self, motion: BodyMotion, now_us, bias_dps=None, noise_dps=0.03, seed=0):
         """`bias_dps` is the gyro's zero-rate offset (x, y, z); None draws a small one from the seed
@@ -98,6 +108,23 @@ class ICM45686Model:
         self.soft_resets = 0
         self._reset()
         self._usable_from_us = 0  # powered up long before the program starts
+        self._filtered_since = None  # (time us, attitude) the next averaged rate starts from
+        self._filtered_dps = np.zeros(3)
+
+    def _filtered_rates_dps(self) -> np.ndarray:
+        """The average body rate since the previous read (reads closer than a sample period apart,
+        such as accel and gyro in two transfers, see the same output)."""
+        now = self.now_us()
+        quat = self.motion.quat().copy()
+        if self._filtered_since is None:
+            self._filtered_dps = self.motion.rates_dps()
+        else:
+            then, earlier = self._filtered_since
+            if now - then < self.MIN_SAMPLE_US:
+                return self._filtered_dps
+            self._filtered_dps = self.motion.rotation_since_deg(earlier) / ((now - then) * 1e-6)
+        self._filtered_since = (now, quat)
+        return self._filtered_dps
 
     def _reset(self):
         self.regs = bytearray(128)
@@ -122,7 +149,7 @@ class ICM45686Model:
         else:
             accel = [self.NO_DATA] * 3
         if gyro_on:
-            rates = self.motion.rates_dps() + self.bias_dps
+            rates = self._filtered_rates_dps() + self.bias_dps
             noisy = [r + self._rng.gauss(0.0, self.noise_dps) for r in rates]
             gyro = [_counts(r, self.gyro_fs_dps()) for r in noisy]
         else:
