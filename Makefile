@@ -4,7 +4,8 @@
 PYTHON ?= python3
 VENV := .venv
 PY := $(VENV)/bin/python
-APT_PACKAGES := gcc-multilib
+# chromium: the 3D viewer's page is screenshotted headless (tests/sim/viewer/test_page_renders.py).
+APT_PACKAGES := gcc-multilib chromium
 MPY_NODE := tests/micropython/node_modules/@micropython/micropython-webassembly-pyscript
 
 .PHONY: setup system-packages test test-fast lint console bench
