@@ -5,7 +5,9 @@ peripheral when the runtime has it and the interrupt decoder otherwise:
 
 - QuadratureEncoder decodes in a pin-change interrupt. Fine for Hall
   encoders behind a gearbox (a JGB37-520 at 300 RPM is ~6.6 k edges/s), but
-  Pin.irq tops out around 5-10 kHz of edges.
+  Pin.irq tops out around 5-10 kHz of edges: the ESP32 port has no hard pin
+  interrupts, it queues every handler on the MicroPython scheduler, so a
+  burst the queue cannot hold skips states (counted in `missed`).
 - PCNTEncoder lets the ESP32's pulse-counter peripheral count (machine.Encoder),
   with its glitch filter, for high-resolution GMR encoders (MG370) whose edge
   rate no interrupt handler could keep up with. One PCNT unit per encoder
@@ -60,7 +62,12 @@ def free_pcnt_unit():
 
 
 class QuadratureEncoder:
-    """x4 decoding of an A/B encoder in a hard pin interrupt."""
+    """x4 decoding of an A/B encoder in a (scheduled) pin interrupt.
+
+    The handler reads both lines when it runs, not at the edge, so a late
+    handler still counts the right way as long as the lines moved at most one
+    state since the last one.
+    """
 
     def __init__(self, pin_a, pin_b, invert=False, name="encoder"):
         from machine import Pin
@@ -74,8 +81,8 @@ class QuadratureEncoder:
         self._count = 0
         self.missed = 0  # transitions that skipped a state: edges came faster than the interrupt
         trigger = Pin.IRQ_RISING | Pin.IRQ_FALLING
-        self._a.irq(self._edge, trigger, hard=True)
-        self._b.irq(self._edge, trigger, hard=True)
+        self._a.irq(self._edge, trigger)
+        self._b.irq(self._edge, trigger)
 
     def _edge(self, _pin):
         state = (self._a.value() << 1) | self._b.value()

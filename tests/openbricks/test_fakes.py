@@ -4,6 +4,8 @@ import time
 
 import machine
 
+from fakes.expect import raises
+
 
 def test_sleep_fires_periodic_timers_at_their_due_times():
     seen = []
@@ -34,3 +36,9 @@ def test_the_rtc_reads_back_what_was_set_whatever_the_host_time_zone():
     time.sleep_ms(1500)
     assert rtc.datetime() == (2026, 3, 14, 5, 12, 30, 46, 750000)
     assert time.time() == time.mktime((2026, 3, 14, 12, 30, 46, 0, 0))
+
+
+def test_pin_irq_takes_only_what_the_esp32_port_takes():
+    pin = machine.Pin(7, machine.Pin.IN)
+    with raises(TypeError):
+        pin.irq(lambda _p: None, machine.Pin.IRQ_RISING, hard=True)  # no hard pin IRQs on the ESP32

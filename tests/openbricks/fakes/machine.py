@@ -119,7 +119,9 @@ class Pin:
     def off(self):
         self._out = 0
 
-    def irq(self, handler=None, trigger=3, hard=False):
+    def irq(self, handler=None, trigger=3, wake=None):
+        # The ESP32 port's signature: it has no `hard=` (every pin handler is scheduled), and a
+        # driver passing one gets a TypeError on the hub.
         self._irq_handler = handler
         self._irq_trigger = trigger
 
