@@ -493,6 +493,11 @@ class Launcher:
                         # A stop retry that landed while the finished run was being torn down:
                         # the run is over either way, and the hub must keep serving the button.
                         pass
+                    except Exception as exc:  # noqa: BLE001 - the run never started
+                        # Nothing staged yet, or no room for the run log: say why on the console and
+                        # keep serving the button (leaving this loop would leave the hub at the REPL
+                        # with a program button that refuses every start until a reset).
+                        print("program button: no run started: %s" % _exception_line(exc))
                 time.sleep_ms(self.poll_ms)
         finally:
             self._idling = False

@@ -376,3 +376,24 @@ def test_the_next_program_can_rewire_the_servo_bus_the_last_one_used():
         assert pins.owner_of(41) is None and pins.owner_of(6) is None
     finally:
         tmpdir.remove(directory)
+
+
+def test_a_press_with_nothing_staged_is_explained_and_the_button_keeps_working():
+    directory = tmpdir.make()
+    try:
+        hub = launcher.Launcher(BUTTON, directory + "/program.py", log_dir=directory + "/logs")
+        hub.start_watcher(0)
+        printed = []
+        launcher.print = printed.append  # the console
+        try:
+            _press(100)  # a freshly flashed hub: nothing uploaded yet
+            hub.idle(1000)
+        finally:
+            del launcher.print
+        assert any("no program staged at %s/program.py" % directory in line for line in printed), printed
+        _stage(directory, "print('uploaded later')\n")
+        _press(100)
+        hub.idle(1000)
+        assert "uploaded later" in _log_lines(directory)
+    finally:
+        tmpdir.remove(directory)
