@@ -29,6 +29,7 @@ import traceback
 from dataclasses import asdict, dataclass, field
 
 from .clock import SimStopped, SimTimeLimit
+from .limits import DEFAULT_MEMORY_MB, limit_memory
 from .run_flash import HubDirError, RunFlash, prepare_hub_dir
 from .sensors.rig import BARE_0X29, RANGE_FINDERS
 from .shim import Shim
@@ -266,8 +267,15 @@ def main(argv=None) -> int:
         help="the one 0x29 part wired straight to the I2C bus, with no mux in between "
         "(a TCS34725 over the left colour site, or the range finder)",
     )
+    parser.add_argument(
+        "--memory-mb",
+        type=int,
+        default=DEFAULT_MEMORY_MB,
+        help=f"address-space limit of this run's process, 0 for none (default: {DEFAULT_MEMORY_MB})",
+    )
     parser.add_argument("--json", action="store_true", help="print the result as one JSON object")
     args = parser.parse_args(argv)
+    limit_memory(args.memory_mb)
     stdout = sys.stdout
     echo = None if args.json else stdout.write
     try:

@@ -13,11 +13,11 @@ import argparse
 import faulthandler
 import os
 import re
-import resource
 import signal
 import sys
 import threading
 
+from ..limits import DEFAULT_MEMORY_MB, limit_memory
 from .control import SOCKET_NAME, ControlServer
 from .hub import HubBusyError, HubConfig, VirtualHub
 from .hub_fs import DEFAULT_CAPACITY_BYTES
@@ -27,7 +27,6 @@ from .transport import PtyPort, StdioPort
 DATA_DIR_ENV = "OPENBRICKS_DATA_DIR"
 HUBS_SUBDIR = "virtual-hubs"
 NAME_PATTERN = re.compile(r"[A-Za-z0-9][A-Za-z0-9_-]{0,28}")
-DEFAULT_MEMORY_MB = 1024
 
 
 def hubs_dir():
@@ -101,16 +100,6 @@ def parse_args(argv=None):
     return args
 
 
-def _limit_memory(megabytes):
-    if not megabytes:
-        return
-    limit = megabytes * 1024 * 1024
-    _soft, hard = resource.getrlimit(resource.RLIMIT_AS)
-    if hard != resource.RLIM_INFINITY:
-        limit = min(limit, hard)
-    resource.setrlimit(resource.RLIMIT_AS, (limit, hard))
-
-
 def main(argv=None):
     args = parse_args(argv)
     directory = os.path.abspath(args.dir or os.path.join(hubs_dir(), args.name))
@@ -136,7 +125,7 @@ def main(argv=None):
         return 2
     control = ControlServer(hub, os.path.join(directory, SOCKET_NAME)).start()
     hub.control_path = control.path
-    _limit_memory(args.memory_mb)
+    limit_memory(args.memory_mb)
 
     def ready():
         if args.pty:

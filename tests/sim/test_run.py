@@ -93,28 +93,42 @@ def test_a_stop_from_outside_ends_the_run():
     assert result.exit == STOPPED and result.sim_ms == 0
 
 
-@pytest.mark.e2e
-def test_the_module_entry_point_runs_a_file_in_its_own_process_and_prints_json(tmp_path):
-    program = tmp_path / "mission.py"
-    program.write_text(DRIVE_FORWARD)
+def run_in_own_process(program, *options, cwd):
+    """`python -m openbricks_sim.run PROGRAM --json OPTIONS`, importing this process's extension builds."""
     env = dict(os.environ)
-    # The child must import the same builds of the extensions as this process.
     import openbricks_mjcontrol
 
     import openbricks_native
 
     paths = {os.path.dirname(openbricks_native.__file__), os.path.dirname(openbricks_mjcontrol.__file__)}
     env["PYTHONPATH"] = os.pathsep.join([*paths, env.get("PYTHONPATH", "")])
-    out = subprocess.run(
-        [sys.executable, "-m", "openbricks_sim.run", str(program), "--json", "--limit-ms", "5000"],
+    return subprocess.run(
+        [sys.executable, "-m", "openbricks_sim.run", str(program), "--json", *options],
         capture_output=True,
         text=True,
         timeout=120,
         env=env,
-        cwd=tmp_path,
+        cwd=cwd,
     )
+
+
+@pytest.mark.e2e
+def test_the_module_entry_point_runs_a_file_in_its_own_process_and_prints_json(tmp_path):
+    program = tmp_path / "mission.py"
+    program.write_text(DRIVE_FORWARD)
+    out = run_in_own_process(program, "--limit-ms", "5000", cwd=tmp_path)
     assert out.returncode == 0, out.stderr
     result = json.loads(out.stdout)
     assert result["exit"] == FINISHED and result["output"].startswith("done at")
     assert result["pose"]["x_mm"] > 500
     assert result["peak_rss_mb"] < 120, "the product's memory bar for a simulator process"
+
+
+@pytest.mark.e2e
+def test_a_run_process_caps_its_memory_and_a_hog_ends_in_its_own_memory_error(tmp_path):
+    program = tmp_path / "hog.py"
+    program.write_text("blocks = []\nwhile True:\n    blocks.append(bytearray(50 * 1024 * 1024))\n")
+    out = run_in_own_process(program, "--memory-mb", "400", cwd=tmp_path)
+    result = json.loads(out.stdout)
+    assert result["exit"] == ERROR
+    assert result["error"].rstrip().endswith("MemoryError")
