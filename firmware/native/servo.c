@@ -189,8 +189,30 @@ static void plan(ob_servo_t *s, bool was_tracking) {
 static void plan_or_defer(ob_servo_t *s, bool was_tracking) {
     if (s->have_angle) {
         plan(s, was_tracking);
+        s->plan_unconfirmed = true;
     } else {
         s->needs_plan = true;
+    }
+}
+
+/*
+ * A command plans from the state of the last tick. When the next reading
+ * comes more than silent_timeout_ms after that tick, the servo was not being
+ * ticked (unsubscribed while another controller drove the motor, or its
+ * caller stalled): the shaft may have been turned meanwhile and the
+ * trajectory's start lies in the past, so following it would lunge at full
+ * duty toward a target computed from a stale angle. Plan the command again
+ * from this reading, starting now, with the observer re-seeded at rest (its
+ * prediction across the gap is meaningless).
+ */
+static void confirm_plan(ob_servo_t *s, uint32_t now_ms) {
+    if (!s->plan_unconfirmed) {
+        return;
+    }
+    s->plan_unconfirmed = false;
+    if (closed_loop(s) && now_ms - s->start_ms > s->cfg.silent_timeout_ms) {
+        ob_observer_reset(&s->observer, s->angle_deg);
+        plan(s, false);
     }
 }
 
@@ -441,6 +463,7 @@ void ob_servo_step(ob_servo_t *s, uint32_t now_ms, bool have_angle, float sensor
         s->start_ms = now_ms;
         plan(s, false);
     }
+    confirm_plan(s, now_ms);
 
     float duty;
     switch (s->mode) {

@@ -95,6 +95,7 @@ typedef struct {
     float cmd_value_deg;
     float cmd_accel_dps2;
     float cmd_decel_dps2;
+    bool plan_unconfirmed;    /* planned from the last tick's state; no fresh reading has confirmed it */
     bool reset_pending;       /* reset_angle before the first reading */
     float reset_to_deg;
     uint32_t start_ms;        /* scheduler time of the trajectory's t = 0 */

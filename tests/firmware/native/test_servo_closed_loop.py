@@ -294,6 +294,53 @@ class TestSilentFeedback:
         assert rig.plant.angle_deg == pytest.approx(145.0, abs=1.0)
 
 
+class TestResumeAfterGap:
+    """A servo that stops being ticked (the runtime unsubscribes a wheel's servo while a drive base
+    drives that wheel) and is commanded again right after it is subscribed once more."""
+
+    @staticmethod
+    def idle_while_turned_elsewhere(rig: Rig, turned_deg: float, gap_ms: int) -> float:
+        rig.servo.coast()
+        rig.plant.angle_deg += turned_deg
+        rig.now_ms += gap_ms
+        return rig.plant.angle_deg
+
+    def test_run_angle_after_a_gap_moves_from_where_the_wheel_is_now(self):
+        rig = Rig()
+        rig.servo.run_angle(360, 90, then="hold")
+        rig.run(1500, until=rig.servo.done)
+        here = self.idle_while_turned_elsewhere(rig, 1000.0, 5000)
+        resumed_at = len(rig.trace)
+        rig.servo.run_angle(360, 90, then="hold")
+        rig.run(20)
+        first = rig.window(20)
+        assert np.nanmax(np.abs(first[:, 3])) < 30.0, f"kick of {np.nanmax(np.abs(first[:, 3])):.0f} % duty"
+        rig.run(2000, until=rig.servo.done)
+        rig.run(200)
+        angles = rig.window(len(rig.trace) - resumed_at)[:, 1]
+        assert angles.min() > here - 1.0, f"ran back to {angles.min():.0f} deg from {here:.0f}"
+        assert rig.plant.angle_deg == pytest.approx(here + 90.0, abs=1.0)
+
+    def test_run_speed_after_a_gap_ramps_up_from_rest(self):
+        rig = Rig()
+        rig.run(100)
+        self.idle_while_turned_elsewhere(rig, 300.0, 3000)
+        rig.servo.run_speed(500)
+        rig.run(100)
+        speed = rig.plant.speed_dps
+        assert speed == pytest.approx(150.0, abs=30.0), f"{speed:.0f} deg/s after 0.1 s at 1500 deg/s^2"
+
+    def test_a_late_tick_keeps_the_profile_schedule(self):
+        # Shorter than silent_timeout_ms: a late tick, not a gap; the move keeps its clock.
+        rig = Rig()
+        rig.servo.run_target(500, 720, then="hold")
+        start = rig.now_ms
+        rig.now_ms += 15
+        rig.run(5000, until=rig.servo.done)
+        expected_ms = (720 / 500 + 500 / 1500) * 1000
+        assert rig.now_ms - start == pytest.approx(expected_ms, abs=80)
+
+
 class TestCallableIO:
     def test_callables_carry_the_loop(self):
         plant = WheelPlant()
