@@ -19,7 +19,7 @@ from openbricks_server.paths import virtual_hubs_dir
 
 LOCK_FILE = "hub.lock"  # openbricks_sim.virtual_hub.hub.LOCK_FILE
 CONTROL_SOCKET = "control.sock"  # openbricks_sim.virtual_hub.control.SOCKET_NAME
-STATUS_TIMEOUT_S = 2.0
+STATUS_TIMEOUT_S = 5.0  # a hub still booting answers late; a dead one does not hold its lock
 
 
 @dataclass(frozen=True)

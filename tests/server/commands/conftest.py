@@ -44,6 +44,21 @@ class HubProcess:
         )
         self.pty = self._first_line()
         self.directory = data_dir / "virtual-hubs" / name
+        self._wait_discoverable()
+
+    def _wait_discoverable(self) -> None:
+        """Until the hub answers on its control socket, as `openbricks -n` will look for it."""
+        deadline = time.monotonic() + HUB_START_TIMEOUT_S
+        while True:
+            try:
+                if self.control("status").get("pty") == self.pty:
+                    return
+            except (OSError, ValueError):
+                pass
+            if time.monotonic() > deadline:
+                self.stop()
+                raise RuntimeError(f"virtual hub {self.name} never answered on its control socket")
+            time.sleep(0.1)
 
     def _first_line(self) -> str:
         import selectors
@@ -57,13 +72,14 @@ class HubProcess:
         if not line.startswith("/dev/"):
             self.stop()
             raise RuntimeError(f"virtual hub {self.name} failed: {line} {self.process.stderr.read()}")
-        self.process.stdout.readline()  # "control <path>"
+        control = self.process.stdout.readline().strip()
+        self.control_socket = Path(control.removeprefix("control "))
         return line
 
     def control(self, op: str) -> dict:
         from openbricks_server.link.discovery import control
 
-        return control(self.directory / "control.sock", {"op": op})
+        return control(self.control_socket, {"op": op})
 
     def press_button(self, until: str = "finished", timeout_s: float = 30.0) -> None:
         """Click the program button and wait until the run it starts has begun (until="started") or

@@ -1,8 +1,11 @@
 """A hub that vanishes mid-run: reported at once, with the output already received kept."""
 
+import shutil
 import subprocess
 import sys
+import tempfile
 import time
+from pathlib import Path
 
 import pytest
 
@@ -12,7 +15,9 @@ pytestmark = pytest.mark.e2e
 
 
 def test_a_lost_link_is_reported_within_two_seconds_with_the_output_kept(tmp_path):
-    hub = HubProcess("Vanishing", tmp_path / "data")
+    # A short data dir: discovery finds a hub by the control socket in its folder, whose path must fit
+    # a Unix socket address (this test's own tmp_path is too deep for that).
+    hub = HubProcess("Vanishing", Path(tempfile.mkdtemp(prefix="ob-e2e-")))
     program = tmp_path / "forever.py"
     program.write_text(
         "import time\nn = 0\nwhile True:\n    print('line', n)\n    n += 1\n    time.sleep_ms(50)\n"
@@ -26,8 +31,12 @@ def test_a_lost_link_is_reported_within_two_seconds_with_the_output_kept(tmp_pat
     )
     try:
         received = ""
+        deadline = time.monotonic() + 60
         while "line 5" not in received:
-            received += cli.stdout.readline()
+            line = cli.stdout.readline()
+            if not line or time.monotonic() > deadline:
+                raise AssertionError(f"the run ended before line 5: {received!r} {cli.stderr.read()}")
+            received += line
         hub.process.kill()
         killed = time.monotonic()
         out, err = cli.communicate(timeout=30)
@@ -35,6 +44,7 @@ def test_a_lost_link_is_reported_within_two_seconds_with_the_output_kept(tmp_pat
     finally:
         cli.kill()
         hub.stop()
+        shutil.rmtree(hub.data_dir, ignore_errors=True)
     assert cli.returncode == 1
     assert reported_after_s < 2.0
     assert "line 5" in received + out
