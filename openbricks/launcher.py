@@ -459,9 +459,11 @@ class Launcher:
         halts = self._halts_mark
         if halts is None:
             return
-        self._halts_mark = None
+        # Marked done only once it completed: a late stop retry landing halfway through unwinds to
+        # a caller that winds down again, rather than skipping what was left.
         for line in _release_program_hardware(halts):
             log.write_text(line)
+        self._halts_mark = None
 
     def _elapsed_ms(self):
         return time.ticks_diff(time.ticks_ms(), self._started_ms)
