@@ -75,13 +75,36 @@ static void set_output(ob_drivebase_t *db, bool coast, float duty_left, float du
     db->output.duty_pct[OB_DB_RIGHT] = coast ? 0.0f : duty_right;
 }
 
+/*
+ * Hand wheel i its output through io. An unchanged output is not written
+ * again: a drive base that is idle (coasting) or braked must not keep
+ * re-asserting that on a wheel another controller may be driving meanwhile,
+ * and on the hub every write is a Python call. force writes regardless.
+ */
+static void write_wheel(ob_drivebase_t *db, int i, bool force) {
+    bool coast = db->output.coast[i];
+    float duty = db->output.duty_pct[i];
+    bool same = db->written_valid[i] && coast == db->written.coast[i] && (coast || duty == db->written.duty_pct[i]);
+    if (same && !force) {
+        return;
+    }
+    if (coast) {
+        if (db->io[i].write_coast != NULL) {
+            db->io[i].write_coast(db->io[i].ctx);
+        }
+    } else if (db->io[i].write_duty != NULL) {
+        db->io[i].write_duty(db->io[i].ctx, duty);
+    }
+    db->written.coast[i] = coast;
+    db->written.duty_pct[i] = duty;
+    db->written_valid[i] = true;
+}
+
 /* Release both wheels now, from a command: the next tick would be up to a period late. */
 static void write_coast_now(ob_drivebase_t *db) {
     set_output(db, true, 0.0f, 0.0f);
     for (int i = 0; i < 2; i++) {
-        if (db->io[i].write_coast != NULL) {
-            db->io[i].write_coast(db->io[i].ctx);
-        }
+        write_wheel(db, i, true);
     }
 }
 
@@ -704,12 +727,6 @@ void ob_drivebase_tick(void *ctx, uint32_t now_ms) {
                     db->heading_source.read_heading(db->heading_source.ctx, &fb.heading_deg);
     ob_drivebase_step(db, now_ms, &fb, NULL);
     for (int i = 0; i < 2; i++) {
-        if (db->output.coast[i]) {
-            if (db->io[i].write_coast != NULL) {
-                db->io[i].write_coast(db->io[i].ctx);
-            }
-        } else if (db->io[i].write_duty != NULL) {
-            db->io[i].write_duty(db->io[i].ctx, db->output.duty_pct[i]);
-        }
+        write_wheel(db, i, false);
     }
 }

@@ -176,6 +176,8 @@ typedef struct {
     bool clock_started;
     uint8_t fault;
     ob_drivebase_output_t output;
+    ob_drivebase_output_t written; /* what the tick last wrote through io, per wheel ... */
+    bool written_valid[2];         /* ... once it has written anything */
     uint32_t cached_dt_ms;    /* tick spacing the two values below were computed for */
     float cached_dt_s;
     float cached_inv_dt;

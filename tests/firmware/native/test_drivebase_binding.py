@@ -171,6 +171,30 @@ def test_motor_process_ticks_a_drivebase_natively_through_its_io_callables():
     assert wired.duties == [None, None], "then='coast' released both wheels through coast_*()"
 
 
+def test_an_idle_drivebase_leaves_the_wheels_to_whoever_drives_them():
+    # After a coasting end, the drive base keeps ticking (odometry) but writes nothing more: a
+    # motor driven directly afterwards (its own servo, dc()) is not released again every period.
+    wired = WiredChassis()
+    db = wired.drivebase()
+    process = native.MotorProcess()
+    process.subscribe(db)
+    db.straight(100)
+    now = 0
+    while not db.done():
+        process.tick(now)
+        wired.step()
+        now += 1
+        assert now < 5000
+    process.tick(now)
+    calls = wired.coast_calls
+    wired.duties[0] = 50.0  # another controller drives the left wheel
+    for later in range(now + 1, now + 500):
+        process.tick(later)
+        wired.step()
+    assert wired.coast_calls == calls, f"{wired.coast_calls - calls} coast writes while idle"
+    assert wired.duties == [50.0, None]
+
+
 def test_coast_stop_releases_both_wheels_inside_the_call():
     wired = WiredChassis()
     db = wired.drivebase()
