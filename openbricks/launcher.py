@@ -355,7 +355,9 @@ class Launcher:
         self._stop_pressed_ms = now
         self._last_attempt_ms = now
         self._stop_retries = 0
-        log.note("button pressed -> stop")
+        # Halting comes before the first commit: a littlefs commit takes 60-90 ms on the hub, and
+        # the robot keeps driving meanwhile. The line is committed with "estop engaged" below.
+        log.note("button pressed -> stop", commit=False)
         failures = estop.engage("program button")
         line = "estop engaged"
         for _halt, exc in failures:

@@ -165,8 +165,9 @@ class _LogSession:
             return
         self._queue(data)
 
-    def write_text(self, text):
-        """A framing line (or lines, e.g. a traceback): stamped, always kept, committed now."""
+    def write_text(self, text, commit=True):
+        """A framing line (or lines, e.g. a traceback): stamped, always kept, committed now (or, with
+        commit=False, together with the next commit)."""
         if self._file is None:
             return
         if self._line_open:
@@ -180,7 +181,8 @@ class _LogSession:
             self.dropped_bytes += len(data)
             return
         self._queue(data)
-        self.flush()
+        if commit:
+            self.flush()
 
     # -- what goes out -----------------------------------------------------------------------
 
@@ -265,9 +267,15 @@ def write_text(text):
         current.write_text(text)
 
 
-def note(text):
-    """One stamped line in the active run's log file only (the console is not touched)."""
-    write_text(text)
+def note(text, commit=True):
+    """One stamped line in the active run's log file only (the console is not touched).
+
+    Committed at once unless commit=False, for a caller with something more urgent to do first
+    (the stop button halts the motors before paying for a flash commit).
+    """
+    current = _active[0]
+    if current is not None:
+        current.write_text(text, commit)
 
 
 def pump():
