@@ -147,6 +147,13 @@ static int ctl_init(ControllerObject *self, PyObject *args, PyObject *kwargs) {
     if (!PyArg_ParseTupleAndKeywords(args, kwargs, "OO|O:Controller", kwlist, &model, &data, &world)) {
         return -1;
     }
+    if (self->data != NULL) {
+        /* WheelIO objects and the wheels point into the mjData this controller was built on. */
+        PyErr_SetString(PyExc_RuntimeError,
+                        "Controller is already initialised; its wheels point into the MjData it was built on. "
+                        "Build a new Controller for another model or data");
+        return -1;
+    }
     if (world != Py_None && !PyObject_TypeCheck(world, capi->motor_process_type)) {
         PyErr_Format(PyExc_TypeError, "Controller: world must be an openbricks_native.MotorProcess or None, not %.100s",
                      Py_TYPE(world)->tp_name);

@@ -123,3 +123,17 @@ def test_controllers_refuse_a_bare_or_half_given_motor_io(physics):
         native.Servo(io=object())
     with pytest.raises(TypeError, match="not a mix"):
         native.DriveBase(88, 138, left_io=physics.wheel_io(0))
+
+
+def test_a_controller_cannot_be_moved_onto_another_mjdata(physics):
+    # Its wheels and every WheelIO point into the MjData it was built on: re-initialising it onto
+    # another one would leave them reading and writing the old, possibly freed, arrays.
+    controller = physics.attach_control()
+    io = physics.wheel_io(0)
+    other = mujoco.MjData(physics.model)
+    with pytest.raises(RuntimeError, match="already initialised"):
+        controller.__init__(physics.model, other)
+    io.write_duty(40)
+    physics.step(50)
+    assert io.read_angle() == pytest.approx(physics.wheel_angle_deg(0), abs=360 / 4096)
+    assert io.read_angle() > 0.0, "the wheel on the original MjData is still driven"
