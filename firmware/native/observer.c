@@ -9,6 +9,8 @@
  */
 #include "observer.h"
 
+#include <float.h>
+
 static float gain_or(float gain, float fallback) {
     return (gain > 0.0f && gain <= 1.0f) ? gain : fallback;
 }
@@ -35,8 +37,14 @@ void ob_observer_update_inv(ob_observer_t *ob, float measured_deg, float dt_s, f
 }
 
 void ob_observer_update(ob_observer_t *ob, float measured_deg, float dt_s) {
-    if (dt_s > 0.0f) {
-        ob_observer_update_inv(ob, measured_deg, dt_s, 1.0f / dt_s);
+    if (!(dt_s > 0.0f)) {
+        return;
+    }
+    /* A denormal dt overflows 1 / dt: as good as no time passing, and an infinite gain would
+     * turn the speed into inf, then NaN for good. */
+    float inv_dt_s = 1.0f / dt_s;
+    if (inv_dt_s <= FLT_MAX) {
+        ob_observer_update_inv(ob, measured_deg, dt_s, inv_dt_s);
     }
 }
 

@@ -70,6 +70,16 @@ def test_zero_dt_update_changes_nothing():
     assert ob.update(99.0, 0.0) == before
 
 
+def test_a_denormal_dt_does_not_poison_the_estimate():
+    # 1 / dt overflows float for dt in the denormal range: such a step is no time at all.
+    ob = Observer(x_deg=10.0)
+    ob.update(10.5, DT_S)
+    before = (ob.x_deg, ob.v_dps)
+    assert ob.update(11.0, 1e-40) == before
+    x, v = ob.update(11.0, DT_S)
+    assert math.isfinite(x) and math.isfinite(v)
+
+
 def test_reset_snaps_to_rest():
     ob = Observer()
     for i in range(100):
