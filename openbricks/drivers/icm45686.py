@@ -57,6 +57,8 @@ _SETTLE_US = const(500_000)
 _TRACK_TAU_S = 10.0
 _MAX_BIAS_DPS = 5.0
 _MAX_GAP_US = const(100_000)
+# Every this many timer samples the driver checks it still owns its pins (see _on_timer).
+_OWNERSHIP_CHECK_SAMPLES = const(20)
 
 
 class ICM45686(HeadingFrame):
@@ -105,6 +107,7 @@ class ICM45686(HeadingFrame):
         self._yaw = _new_integrator(scale)
         self._seed_from_nvs()
         self._timer = None
+        self._until_ownership_check = _OWNERSHIP_CHECK_SAMPLES
         if timer_id is not None:
             self._timer = Timer(timer_id)
             self._timer.init(mode=Timer.PERIODIC, period=max(1, 1000 // sample_hz), callback=self._on_timer)
@@ -148,7 +151,17 @@ class ICM45686(HeadingFrame):
 
     # -- sampling -----------------------------------------------------------------------------
 
-    def _on_timer(self, _timer):
+    def _on_timer(self, timer):
+        # The launcher takes a finished program's pins back; its IMU is garbage from then on, but
+        # a running timer would keep it sampling (and loading the scheduler) until the next reset.
+        self._until_ownership_check -= 1
+        if self._until_ownership_check <= 0:
+            self._until_ownership_check = _OWNERSHIP_CHECK_SAMPLES
+            owner = pins.owner_of(self._pins[3])
+            if owner is None or owner[1] is not self:
+                timer.deinit()
+                self._timer = None
+                return
         self._sample()
 
     def _sample(self):

@@ -173,3 +173,18 @@ def test_spi_pins_are_claimed():
         pins.claim(17, "status LED", "hub")
     imu.close()
     pins.claim(17, "status LED", "hub")
+
+
+def test_sampling_stops_once_the_program_that_built_it_has_given_its_pins_back():
+    claims = pins.snapshot()  # what the launcher does around a run
+    imu, chip = _imu()
+    time.sleep_ms(100)
+    assert chip.data_reads > 0
+    pins.release_since(claims)  # the run ended: the IMU is the finished program's garbage
+    time.sleep_ms(500)  # its timer notices within a few samples
+    reads = chip.data_reads
+    time.sleep_ms(2000)
+    assert chip.data_reads == reads  # no SPI traffic (or scheduler load) from a dead program
+    pins.claim(17, "L298N PWM/EN", "L298N")  # the next program may wire the pins its own way
+    time.sleep_ms(100)
+    assert chip.data_reads == reads
