@@ -44,8 +44,15 @@ test-fast: setup
 	$(PY) setup.py -q build_ext --inplace
 	$(PY) -m pytest -m "not e2e" -q
 
+# The embedded default: a simulated hub (virtual hub + MuJoCo), no hardware. It runs in the
+# foreground until Ctrl-C; drive it from another terminal with the `openbricks` CLI.
+HUB ?= SimHub
 console: setup
-	$(VENV)/bin/openbricks --help
+	$(PY) setup.py -q build_ext --inplace
+	@echo "virtual hub $(HUB) with the simulator behind it; in another terminal:"
+	@echo "  .venv/bin/openbricks run -n $(HUB) examples/drivebase_square.py"
+	@echo "  .venv/bin/openbricks log -n $(HUB)"
+	$(PY) -m openbricks_sim.virtual_hub --name $(HUB) --pty
 
 bench: setup
 	$(PY) setup.py -q build_ext --inplace
