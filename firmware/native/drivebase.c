@@ -9,7 +9,8 @@
 #define OB_DB_PI 3.14159265358979f
 #define OB_DB_MAX_DUTY 100.0f
 
-/* A tick spacing longer than this is a stall of the caller, not elapsed control time. */
+/* A tick spacing longer than this is a stall of the caller, not elapsed control time: the
+ * integrators never integrate over more than this in one step. */
 #define OB_DB_MAX_DT_S 0.05f
 
 /* Below this the non-moving axis of a new move counts as at rest and is simply held. */
@@ -444,7 +445,7 @@ static bool estimate(ob_drivebase_t *db, const ob_drivebase_feedback_t *fb, uint
     if (dt_ms != db->cached_dt_ms) {
         /* The period rarely changes: one division when it does, none per tick. */
         db->cached_dt_ms = dt_ms;
-        db->cached_dt_s = fminf((float)dt_ms * 0.001f, OB_DB_MAX_DT_S);
+        db->cached_dt_s = (float)dt_ms * 0.001f;
         db->cached_inv_dt = dt_ms > 0 ? 1.0f / db->cached_dt_s : 0.0f;
     }
     float dt_s = db->cached_dt_s;
@@ -454,6 +455,9 @@ static bool estimate(ob_drivebase_t *db, const ob_drivebase_feedback_t *fb, uint
             if (!db->wheel_seen[i]) {
                 ob_observer_reset(&db->observer[i], fb->wheel_deg[i]);
                 db->wheel_seen[i] = true;
+            } else if (dt_ms > db->watchdog_ms) {
+                /* The caller stalled (a long GC pause): the wheels went on meanwhile. */
+                ob_observer_resync(&db->observer[i], fb->wheel_deg[i], dt_s);
             } else if (dt_ms > 0) {
                 ob_observer_update_inv(&db->observer[i], fb->wheel_deg[i], dt_s, db->cached_inv_dt);
             }
@@ -643,7 +647,7 @@ static void control(ob_drivebase_t *db, bool fresh, uint32_t dt_ms) {
     }
     ob_trajectory_sample_t rs, rd;
     float t = elapsed_s(db);
-    float dt_s = db->cached_dt_s;
+    float dt_s = fminf(db->cached_dt_s, OB_DB_MAX_DT_S);
     ob_trajectory_sample(&db->sum.trajectory, t, &rs);
     ob_trajectory_sample(&db->diff.trajectory, t, &rd);
     float es = rs.x_deg - db->sum_deg;

@@ -48,6 +48,14 @@ void ob_observer_update(ob_observer_t *ob, float measured_deg, float dt_s) {
     }
 }
 
+void ob_observer_resync(ob_observer_t *ob, float measured_deg, float dt_s) {
+    if (dt_s > 0.0f) {
+        float v_dps = (measured_deg - ob->x_deg) / dt_s;
+        ob->v_dps = (v_dps <= FLT_MAX && v_dps >= -FLT_MAX) ? v_dps : 0.0f;
+    }
+    ob->x_deg = measured_deg;
+}
+
 void ob_observer_predict(ob_observer_t *ob, float dt_s) {
     if (dt_s > 0.0f) {
         ob->x_deg += ob->v_dps * dt_s;

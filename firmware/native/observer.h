@@ -31,6 +31,15 @@ void ob_observer_update(ob_observer_t *ob, float measured_deg, float dt_s);
 /* ob_observer_update with 1/dt_s supplied by a caller that caches it. */
 void ob_observer_update_inv(ob_observer_t *ob, float measured_deg, float dt_s, float inv_dt_s);
 
+/*
+ * Take a reading that comes after a long gap (the caller stalled, or nobody
+ * ticked the controller): the estimate jumps to the reading and the speed to
+ * the average over the gap. Corrected as usual instead, the residual of a
+ * prediction over the whole gap would be fed back over the next few 1 ms
+ * updates with a gain of beta / 1 ms, a speed spike of thousands of deg/s.
+ */
+void ob_observer_resync(ob_observer_t *ob, float measured_deg, float dt_s);
+
 /* Predict over dt_s with no reading (feedback went silent this tick). */
 void ob_observer_predict(ob_observer_t *ob, float dt_s);
 

@@ -432,7 +432,12 @@ static void read_feedback(ob_servo_t *s, uint32_t now_ms, uint32_t dt_ms, bool h
         return;
     }
     s->angle_deg = sensor_deg + s->offset_deg;
-    ob_observer_update_inv(&s->observer, s->angle_deg, s->cached_dt_s, s->cached_inv_dt);
+    if (dt_ms > s->cfg.silent_timeout_ms) {
+        /* The caller stalled (a long GC pause): the motor went on meanwhile. */
+        ob_observer_resync(&s->observer, s->angle_deg, s->cached_dt_s);
+    } else {
+        ob_observer_update_inv(&s->observer, s->angle_deg, s->cached_dt_s, s->cached_inv_dt);
+    }
 }
 
 void ob_servo_step(ob_servo_t *s, uint32_t now_ms, bool have_angle, float sensor_deg) {

@@ -38,6 +38,26 @@ def test_a_silent_wheel_halts_the_drivebase_within_50_ms_without_winding_up(side
         db.done()
 
 
+@pytest.mark.parametrize("stall_ms", [100, 200])
+def test_a_stalled_caller_resumes_at_cruise_without_a_jolt(stall_ms):
+    # A long GC pause on the hub: no control period for stall_ms while the wheels keep their last
+    # duty. The first readings afterwards must not read as a speed spike that kicks the duties.
+    db, rig = new_rig()
+    db.straight(600, then="hold")
+    rig.run(700)  # at cruise
+    cruise = rig.trace[-1].duties
+    for _ in range(stall_ms):
+        rig.chassis.step(cruise, 0.001)
+        rig.now_ms += 1
+    resumed_at = len(rig.trace)
+    rig.run(60)
+    worst = max(abs(d - c) for s in rig.trace[resumed_at:] for d, c in zip(s.duties, cruise, strict=True))
+    assert worst < 5.0, f"duty jumped by {worst:.0f} % after a {stall_ms} ms stall at cruise"
+    rig.run_until(db.done, 5000)
+    rig.run(300)
+    assert rig.chassis.x_mm == pytest.approx(600.0, abs=1.0)
+
+
 def test_a_new_move_after_the_wheel_returns_clears_the_fault_and_drives_normally():
     db, rig = new_rig()
     db.straight(500)

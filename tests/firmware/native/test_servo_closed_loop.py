@@ -330,6 +330,21 @@ class TestResumeAfterGap:
         speed = rig.plant.speed_dps
         assert speed == pytest.approx(150.0, abs=30.0), f"{speed:.0f} deg/s after 0.1 s at 1500 deg/s^2"
 
+    def test_speed_estimate_after_a_stalled_caller_follows_the_motor(self):
+        # A long GC pause: no tick for 300 ms while the released motor slowed down. The first
+        # readings afterwards must give the speed the motor has, not a spike from a stale prediction.
+        rig = Rig()
+        rig.servo.run_speed(500)
+        rig.run(800)
+        for _ in range(300):
+            rig.plant.step(None, 0.001)
+            rig.now_ms += 1
+        errors = []
+        for _ in range(30):
+            rig.run(1)
+            errors.append(abs(rig.servo.speed() - rig.plant.speed_dps))
+        assert max(errors) < 100.0, f"speed estimate off by up to {max(errors):.0f} deg/s"
+
     def test_a_late_tick_keeps_the_profile_schedule(self):
         # Shorter than silent_timeout_ms: a late tick, not a gap; the move keeps its clock.
         rig = Rig()
