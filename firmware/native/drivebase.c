@@ -455,6 +455,12 @@ static bool estimate(ob_drivebase_t *db, const ob_drivebase_feedback_t *fb, uint
             if (!db->wheel_seen[i]) {
                 ob_observer_reset(&db->observer[i], fb->wheel_deg[i]);
                 db->wheel_seen[i] = true;
+                /* Distance and heading start at zero where the wheel stands at its first reading,
+                 * not at the encoder's own zero: the motors may have turned before the drive base
+                 * was built, and a first move armed before this reading planned from zero. */
+                float half = 0.5f * fb->wheel_deg[i];
+                db->sum_zero_deg += half;
+                db->diff_zero_deg += i == OB_DB_LEFT ? half : -half;
             } else if (dt_ms > db->watchdog_ms) {
                 /* The caller stalled (a long GC pause): the wheels went on meanwhile. */
                 ob_observer_resync(&db->observer[i], fb->wheel_deg[i], dt_s);

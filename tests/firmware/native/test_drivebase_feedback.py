@@ -152,6 +152,24 @@ def test_reset_makes_the_current_pose_zero_and_the_next_move_follows_the_new_fra
     assert db.angle() == pytest.approx(0, abs=0.2)
 
 
+def test_a_drivebase_built_on_wheels_that_turned_before_starts_at_zero():
+    # The wheels' encoders read 720 deg (their motors ran before the drive base was built) and the
+    # first move is armed before the first period, as the runtime does right after subscribing.
+    chassis = Chassis()
+    for wheel, angle in zip(chassis.wheels, (720.0, 540.0), strict=True):
+        wheel.angle_deg = angle
+    db = native.DriveBase(WHEEL_DIAMETER_MM, AXLE_TRACK_MM)
+    rig = Rig(db.update, chassis)
+    db.straight(300)
+    rig.run(1)
+    assert db.state()[0] == pytest.approx(0.0, abs=0.1) and db.state()[2] == pytest.approx(0.0, abs=0.1)
+    rig.run_until(db.done, 5000)
+    rig.run(300)
+    assert rig.chassis.x_mm == pytest.approx(300.0, abs=1.0)
+    assert abs(rig.chassis.heading_deg) < 0.5
+    assert db.distance() == pytest.approx(300.0, abs=1.0)
+
+
 def test_reset_is_refused_while_a_move_is_in_progress():
     db, rig = new_rig()
     db.straight(300)
