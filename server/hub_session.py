@@ -140,6 +140,7 @@ async def with_hub(
         link, virtual = await open_link(name, scan_timeout_s)
         if debug:
             _tap(link, _packet_dump)
+        session = None
         try:
             await link.connect()
             repl = RawRepl(link)
@@ -147,13 +148,19 @@ async def with_hub(
             info = await repl.info()
             await repl.set_rtc(int(time.time() * 1000))
             session = HubSession(name, repl, info, virtual)
-            result = await talk(session)
-            if hand_back:
-                await _hand_back(session)
-            return result
+            return await talk(session)
         except LinkError as exc:
             raise translate(name, exc, dropped=link.dropped_at is not None) from None
         finally:
+            # Whatever happened, a hub we can still reach goes back to its launcher, or its program
+            # button stays dead until the next connection. Not when the user left mid-wait (Ctrl-C
+            # twice): the hub may still be running, and the hand-back line would reach the program.
+            task = asyncio.current_task()
+            if hand_back and session is not None and link.is_open and not (task and task.cancelling()):
+                try:
+                    await _hand_back(session)
+                except LinkError:
+                    pass
             await link.close()
 
 

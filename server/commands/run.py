@@ -14,6 +14,7 @@ import sys
 from openbricks_server.compile import code_program, read_program
 from openbricks_server.errors import EXIT_FAILED, EXIT_INTERRUPTED, EXIT_OK, CliError
 from openbricks_server.hub_session import with_hub
+from openbricks_server.link import HubException
 from openbricks_server.staging import prepare, stage
 
 RUN_TIMEOUT_S = 24 * 3600.0  # a mission may run long; the link's own drop detection catches dead hubs
@@ -75,6 +76,12 @@ async def _talk(session, program):
         result = await session.repl.run(
             path, on_output=TerminalOutput(), on_link_event=_link_event, timeout_s=RUN_TIMEOUT_S
         )
+    except HubException as exc:
+        # A stop that lands mid-print can end the run before its result line is out: the hub's
+        # KeyboardInterrupt after our Ctrl-C is then the confirmation.
+        if not (stopper.requested and "KeyboardInterrupt" in exc.traceback):
+            raise
+        result = {"outcome": "stopped", "run": None}
     except asyncio.CancelledError:
         if stopper.abandoned:
             raise CliError(

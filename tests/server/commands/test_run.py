@@ -56,7 +56,7 @@ def test_ctrl_c_stops_the_remote_program_and_the_hub_confirms(env, hub, tmp_path
         out, err = process.communicate(timeout=30)
     finally:
         process.kill()
-    assert process.returncode == 130
+    assert process.returncode == 130, err
     assert "stopping the program on RobotA" in err and "stopped: RobotA confirmed the program ended" in err
     assert "Traceback" not in err
     assert not hub.control("status")["running"]
