@@ -5,7 +5,7 @@ UV textures, height fields), bodies that share a shape are drawn as one batched 
 moves only the bodies that can move. It draws every plane as viser's infinite grid, though, and our
 mats are planes whose printed canvas is the whole point of a line-following or colour world; so
 each textured plane is drawn again here as a textured quad in place of its grid. The plain floor
-keeps the grid, which reads well as "the floor".
+keeps a grid, which reads well as "the floor", minus the white sheet that would veil the mat.
 """
 
 from __future__ import annotations
@@ -26,7 +26,7 @@ from PIL import Image
 _MAT_LIFT_M = 0.0003
 # Free space around what the camera frames first, and the least it frames (a lone robot).
 _FRAME_MARGIN_M = 0.15
-_MIN_FRAME_SPAN_M = 0.6
+_MIN_FRAME_SPAN_M = 0.8
 
 
 class SceneMirror:
@@ -39,7 +39,7 @@ class SceneMirror:
         # The camera stays where the watcher puts it: mjviser's tracking would instead slide the whole
         # world under a fixed camera to keep one body centred.
         self._mirror.camera_tracking_enabled = False
-        self._draw_printed_planes()
+        self._draw_planes()
         self.look_at, self.camera_position = _overview(model, focus_body)
         server.initial_camera.look_at = self.look_at
         server.initial_camera.position = self.camera_position
@@ -64,27 +64,41 @@ class SceneMirror:
             client.camera.look_at = self.look_at
             client.camera.position = self.camera_position
 
-    def _draw_printed_planes(self) -> None:
+    def _draw_planes(self) -> None:
+        """Redraw each fixed plane in place of mjviser's grid for it (same node name, so it replaces it).
+
+        A printed plane becomes a textured quad. A plain one (the floor) stays a grid in a world
+        without a mat, where it gives a sense of scale; next to a mat it becomes a solid sheet of its
+        colour, since a grid (its lines and its translucent sheet alike) draws over the mat and
+        washes out the print.
+        """
         model = self.model
         data = mujoco.MjData(model)
         mujoco.mj_kinematics(model, data)
+        printed = any(_plane_texture(model, geom) is not None for geom in range(model.ngeom))
         for geom in range(model.ngeom):
-            image = _plane_texture(model, geom)
-            if image is None:
-                continue
             body = int(model.geom_bodyid[geom])
-            if model.body_weldid[body] != 0:
+            if model.geom_type[geom] != mujoco.mjtGeom.mjGEOM_PLANE or model.body_weldid[body] != 0:
                 continue  # a plane on a moving body: mjviser draws it with the body (untextured)
-            half_x, half_y = (float(v) for v in model.geom_size[geom][:2])
+            name = (
+                f"/fixed_bodies/{_name(model, mujoco.mjtObj.mjOBJ_BODY, body)}/"
+                f"{mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_GEOM, geom)}"
+            )
             quat = np.empty(4)
             mujoco.mju_mat2Quat(quat, data.geom_xmat[geom])
+            image = _plane_texture(model, geom)
+            half_x, half_y = (float(v) for v in model.geom_size[geom][:2])
+            if image is None and not printed:
+                continue  # mjviser's grid it is
+            if image is None:
+                quad, lift = _plain_quad(half_x, half_y, model.geom_rgba[geom]), 0.0
+            else:
+                quad, lift = _textured_quad(half_x, half_y, image), _MAT_LIFT_M
             normal = data.geom_xmat[geom].reshape(3, 3)[:, 2]
-            # The same node name as mjviser's grid for this plane, so the quad replaces the grid.
             self.server.scene.add_mesh_trimesh(
-                f"/fixed_bodies/{_name(model, mujoco.mjtObj.mjOBJ_BODY, body)}/"
-                f"{mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_GEOM, geom)}",
-                _textured_quad(half_x, half_y, image),
-                position=data.geom_xpos[geom] + _MAT_LIFT_M * normal,
+                name,
+                quad,
+                position=data.geom_xpos[geom] + lift * normal,
                 wxyz=quat,
                 cast_shadow=False,
                 receive_shadow=True,
@@ -131,19 +145,30 @@ def _plane_texture(model: mujoco.MjModel, geom: int) -> Image.Image | None:
     return Image.fromarray(np.ascontiguousarray(pixels, dtype=np.uint8))
 
 
-def _textured_quad(half_x: float, half_y: float, image: Image.Image) -> trimesh.Trimesh:
-    """A flat rectangle in its local xy plane with `image` stretched over it once (texrepeat 1 1)."""
+def _quad(half_x: float, half_y: float) -> trimesh.Trimesh:
+    """A flat rectangle in its local xy plane, facing +z."""
     vertices = np.array(
         [[-half_x, -half_y, 0.0], [half_x, -half_y, 0.0], [half_x, half_y, 0.0], [-half_x, half_y, 0.0]]
     )
-    faces = np.array([[0, 1, 2], [0, 2, 3]])
+    return trimesh.Trimesh(vertices=vertices, faces=np.array([[0, 1, 2], [0, 2, 3]]), process=False)
+
+
+def _plain_quad(half_x: float, half_y: float, rgba) -> trimesh.Trimesh:
+    mesh = _quad(half_x, half_y)
+    colour = (np.clip(rgba, 0.0, 1.0) * 255).astype(np.uint8)
+    mesh.visual = trimesh.visual.ColorVisuals(vertex_colors=np.tile(colour, (4, 1)))
+    return mesh
+
+
+def _textured_quad(half_x: float, half_y: float, image: Image.Image) -> trimesh.Trimesh:
+    """A flat rectangle in its local xy plane with `image` stretched over it once (texrepeat 1 1)."""
     # trimesh's uv origin is the image's bottom-left corner: the plane's -x,-y corner gets (0, 0), so
     # the image's first row lands on the +y edge.
     uv = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
     material = trimesh.visual.material.PBRMaterial(
         baseColorTexture=image, metallicFactor=0.0, roughnessFactor=0.9
     )
-    mesh = trimesh.Trimesh(vertices=vertices, faces=faces, process=False)
+    mesh = _quad(half_x, half_y)
     mesh.visual = trimesh.visual.TextureVisuals(uv=uv, material=material)
     return mesh
 
@@ -176,8 +201,8 @@ def _overview(model: mujoco.MjModel, focus_body: str | None):
     centre = (low + high) / 2
     centre[2] = 0.0
     span = max(float(np.max(high[:2] - low[:2])) + 2 * _FRAME_MARGIN_M, _MIN_FRAME_SPAN_M)
-    # From the south, about 50 degrees up, far enough back for the span to fill the default field of view.
-    return centre, centre + np.array([0.0, -0.6 * span, 0.75 * span])
+    # From the south, about 50 degrees up, close enough for the span to fill most of a wide window.
+    return centre, centre + np.array([0.0, -0.4 * span, 0.48 * span])
 
 
 def _name(model, kind, index) -> str:
