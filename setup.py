@@ -27,6 +27,8 @@ setup(
     # Data the installed packages read at run time (a wheel carries only what is named here).
     package_data={"openbricks_server": ["keys/*.pub", "flash/*.json"]},
     exclude_package_data={"openbricks_sim": ["native/*"]},
+    # The user documentation, for `openbricks docs` offline (server/docs_site.py looks here).
+    data_files=[("share/openbricks/docs", sorted(glob("docs/*.md")))],
     ext_modules=[
         Extension(
             "openbricks_native",

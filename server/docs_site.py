@@ -10,6 +10,7 @@ import difflib
 import html
 import os
 import re
+import sys
 from pathlib import Path
 
 from openbricks_server.errors import CliError
@@ -29,8 +30,12 @@ def source_dir() -> Path:
     override = os.environ.get(DOCS_DIR_ENV)
     if override:
         return Path(override)
-    # The package sits in <repo>/server next to <repo>/docs (source checkouts and editable installs).
-    return Path(__file__).resolve().parent.parent / "docs"
+    # A source checkout or editable install: the package sits in <repo>/server next to <repo>/docs.
+    checkout = Path(__file__).resolve().parent.parent / "docs"
+    if checkout.is_dir():
+        return checkout
+    # A wheel install (pip, pipx): setup.py puts the pages under <prefix>/share/openbricks/docs.
+    return Path(sys.prefix) / "share" / "openbricks" / "docs"
 
 
 def topics() -> list[str]:

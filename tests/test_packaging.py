@@ -2,6 +2,10 @@
 
 import subprocess
 import sys
+import zipfile
+from pathlib import Path
+
+import pytest
 
 import openbricks
 
@@ -23,3 +27,37 @@ def test_host_packages_install_under_openbricks_names():
 
     for module in (openbricks_server, openbricks_sim, openbricks_native):
         assert module.__name__.startswith("openbricks")
+
+
+@pytest.mark.e2e
+def test_the_wheel_carries_everything_an_installed_openbricks_reads(tmp_path):
+    """A pipx user gets no source checkout: the files the installed code opens must be in the wheel."""
+    root = Path(__file__).resolve().parent.parent
+    subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "pip",
+            "wheel",
+            "--no-deps",
+            "--no-build-isolation",
+            "-q",
+            "-w",
+            str(tmp_path),
+            str(root),
+        ],
+        check=True,
+        capture_output=True,
+        timeout=600,
+    )
+    (wheel,) = tmp_path.glob("openbricks-*.whl")
+    names = set(zipfile.ZipFile(wheel).namelist())
+    docs = {
+        f"openbricks-{openbricks.__version__}.data/data/share/openbricks/docs/{p.name}"
+        for p in (root / "docs").glob("*.md")
+    }
+    assert docs and docs <= names, "the offline manual of `openbricks docs`"
+    assert "openbricks_server/keys/firmware_signing.pub" in names, "flash's provenance check"
+    assert "openbricks_server/flash/qtr_starter.json" in names, "flash --with-qtr-init"
+    for extension in ("openbricks_native", "openbricks_mjcontrol"):
+        assert any(n.startswith(extension) and n.endswith(".so") for n in names), extension
