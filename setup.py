@@ -24,8 +24,6 @@ def packages() -> list[str]:
 setup(
     packages=packages(),
     package_dir=PACKAGE_FOLDERS,
-    # Data the installed packages read at run time (a wheel carries only what is named here).
-    package_data={"openbricks_server": ["keys/*.pub", "flash/*.json"]},
     exclude_package_data={"openbricks_sim": ["native/*"]},
     # The user documentation, for `openbricks docs` offline (server/docs_site.py looks here).
     data_files=[("share/openbricks/docs", sorted(glob("docs/*.md")))],
