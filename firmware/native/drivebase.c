@@ -196,6 +196,9 @@ static void begin_command(ob_drivebase_t *db, float *s0, float *vs0, float *d0, 
     db->settling = false;
     db->landings = 0;
     db->pinned_ms = 0;
+    db->plan_unconfirmed = true;
+    db->plan_sum_deg = *s0;
+    db->plan_diff_deg = *d0;
 }
 
 static void set_limits(ob_drivebase_axis_t *axis, float speed_dps, float accel_dps2) {
@@ -503,6 +506,32 @@ static bool estimate(ob_drivebase_t *db, const ob_drivebase_feedback_t *fb, uint
     return fresh;
 }
 
+/*
+ * A command plans from the state of the last step. When the first step
+ * after it comes more than the watchdog after that one, the drive
+ * base was not being ticked (unsubscribed while another controller drove the
+ * wheels): the robot may stand elsewhere and the plan's start lies in the
+ * past, so following it would drive back to where the robot was. Carry the
+ * command over to where the robot is now, starting now, from rest.
+ */
+static void confirm_plan(ob_drivebase_t *db) {
+    if (!db->plan_unconfirmed) {
+        return;
+    }
+    db->plan_unconfirmed = false;
+    if ((uint32_t)(db->now_ms - db->start_ms) <= db->watchdog_ms) {
+        return;
+    }
+    for (int i = 0; i < 2; i++) {
+        ob_observer_reset(&db->observer[i], db->observer[i].x_deg);
+    }
+    db->sum_dps = 0.0f;
+    db->diff_dps = 0.0f;
+    shift_axis(&db->sum, db->plan_sum_deg - db->sum_deg);
+    shift_axis(&db->diff, db->plan_diff_deg - db->diff_deg);
+    db->start_ms = db->now_ms;
+}
+
 /* OB_DB_FAULT_* bits of every feedback silent for longer than the watchdog allows. */
 static uint8_t silent_feedback(const ob_drivebase_t *db) {
     uint8_t bits = 0;
@@ -712,8 +741,11 @@ void ob_drivebase_step(ob_drivebase_t *db, uint32_t now_ms, const ob_drivebase_f
             db->sum.integral_deg_s = 0.0f;
             db->diff.integral_deg_s = 0.0f;
             set_output(db, true, 0.0f, 0.0f);
-        } else if (!supervise(db)) {
-            control(db, fresh, dt_ms);
+        } else {
+            confirm_plan(db);
+            if (!supervise(db)) {
+                control(db, fresh, dt_ms);
+            }
         }
     } else if (db->mode == OB_DB_BRAKED) {
         set_output(db, false, 0.0f, 0.0f);

@@ -169,6 +169,9 @@ typedef struct {
     ob_then_t then;
     bool done;
     bool settling;            /* the move's profile expired; waiting for the tolerances */
+    bool plan_unconfirmed;    /* a command planned from the last step's state, no fresh feedback since */
+    float plan_sum_deg;       /* ... and the (sum, diff) it planned from */
+    float plan_diff_deg;
     uint32_t landings;        /* landing trajectories planned for the current command */
     uint32_t pinned_ms;       /* how long the trajectories have been paused for a robot that cannot follow */
     uint32_t start_ms;        /* clock at which the current trajectories start */

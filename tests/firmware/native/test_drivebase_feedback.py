@@ -170,6 +170,30 @@ def test_a_drivebase_built_on_wheels_that_turned_before_starts_at_zero():
     assert db.distance() == pytest.approx(300.0, abs=1.0)
 
 
+def test_a_move_armed_after_the_drivebase_was_not_ticked_starts_where_the_robot_is():
+    # Two drive bases on the same wheels: the runtime unsubscribes one while the other drives, and
+    # subscribes it again right before its next move. That move must not drive back to where the
+    # robot stood when the first one last ran.
+    db, rig = new_rig()
+    db.straight(200)
+    rig.run_until(db.done, 5000)
+    rig.run(200)
+    other = native.DriveBase(WHEEL_DIAMETER_MM, AXLE_TRACK_MM)
+    rig.controller = other.update
+    other.straight(300)
+    rig.run_until(other.done, 5000)
+    rig.run(300)
+    here = rig.chassis.x_mm
+    rig.controller = db.update
+    db.straight(100)
+    resumed_at = len(rig.trace)
+    rig.run_until(db.done, 5000)
+    rig.run(300)
+    assert min(s.x_mm for s in rig.trace[resumed_at:]) > here - 1.0, "drove back"
+    assert rig.chassis.x_mm == pytest.approx(here + 100.0, abs=1.0)
+    assert db.distance() == pytest.approx(600.0, abs=1.0), "odometry counts what the wheels did meanwhile"
+
+
 def test_reset_is_refused_while_a_move_is_in_progress():
     db, rig = new_rig()
     db.straight(300)
