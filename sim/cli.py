@@ -263,15 +263,16 @@ def _run(args) -> int:
     world = _world(args.world)
     if args.no_shim:
         return _run_unshimmed(args, world, script, source)
-    if args.viewer:
-        return _run_with_viewer(args, world, script, source)
-    from openbricks_sim.run import FINISHED, TIME_LIMIT, run_program
     from openbricks_sim.run_flash import HubDirError, prepare_hub_dir
 
     try:
         prepare_hub_dir(args.hub_dir)
     except HubDirError as exc:
         raise SimCliError(str(exc)) from None
+    if args.viewer:
+        return _run_with_viewer(args, world, script, source)
+    from openbricks_sim.run import FINISHED, TIME_LIMIT, run_program
+
     result = run_program(
         str(script),
         world=args.world,

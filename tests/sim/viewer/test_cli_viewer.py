@@ -120,3 +120,15 @@ def test_sim_preview_shows_the_world_with_the_robot_until_ctrl_c():
         if process.poll() is None:
             process.kill()
     assert code == 0, err
+
+
+def test_a_hub_dir_that_cannot_be_a_flash_is_refused_before_the_viewer_starts(tmp_path):
+    program = tmp_path / "roll.py"
+    program.write_text(PROGRAM)
+    not_a_dir = tmp_path / "flash"
+    not_a_dir.write_text("a file")
+    process = start("run", str(program), "--viewer", "--hub-dir", str(not_a_dir))
+    out, err = process.communicate(timeout=60)
+    assert process.returncode == 1
+    assert f"hub directory {not_a_dir} is a file" in err and "3D view" not in err
+    assert "Traceback" not in err and out == ""
