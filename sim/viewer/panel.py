@@ -89,6 +89,16 @@ class ControlPanel:
         with gui.add_folder("Output"):
             self._output = gui.add_html(self._output_html([]))
 
+    def set_speed(self, speed: float | None) -> None:
+        """Show `speed` as the chosen one (a run that arrived with a speed of its own)."""
+        if self._pause_button is None:
+            return
+        label = speed_label(speed)
+        if label not in self._speeds:
+            self._speeds[label] = speed
+            self._speed.options = tuple(self._speeds)
+        self._speed.value = label
+
     def set_paused(self, paused: bool) -> None:
         """Show the run as paused or running (a new run starts unpaused)."""
         self._paused = paused

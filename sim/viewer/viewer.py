@@ -152,6 +152,7 @@ class SimViewer:
             if clock.speed is not None:
                 self._speed = clock.speed
                 clock.speed = None
+                self.panel.set_speed(self._speed)
             self._ensure_scene(simulation.physics.model)
             self._simulation = simulation
             self._stop_run = stop

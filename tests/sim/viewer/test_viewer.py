@@ -51,9 +51,9 @@ def page(viewer):
         yield client
 
 
-def run_program(viewer, source, world="empty"):
+def run_program(viewer, source, world="empty", speed=None):
     """Run source on this thread with the viewer attached; returns (result, simulation end pose)."""
-    sim = Simulation(world, "st3032", epoch_ms=0)
+    sim = Simulation(world, "st3032", epoch_ms=0, speed=speed)
     try:
         run = ProgramRun(sim)
         viewer.attach(sim, stop=run.request_stop)
@@ -163,6 +163,15 @@ def test_the_speed_chosen_on_the_page_sets_the_pace(viewer, page):
     # ~0.3 s at 1x, the remaining ~4 s at 4x: about 1.3 s, far from the 4.3 s of a 1x run.
     assert result.exit == FINISHED
     assert 1.0 < wall_s < 2.2, f"{result.sim_ms} ms took {wall_s:.2f} s"
+
+
+def test_a_simulation_built_with_a_speed_hands_it_to_the_viewer(viewer, page):
+    start = time.perf_counter()
+    result, _ = run_program(viewer, drive(1.5), speed=3.0)
+    assert result.exit == FINISHED
+    assert time.perf_counter() - start == pytest.approx(result.sim_ms / 1000 / 3.0, abs=0.25)
+    time.sleep(0.2)
+    assert page.gui("Speed", "GuiDropdownMessage")["props"]["value"] == "3x"
 
 
 def test_stop_on_the_page_ends_even_a_program_that_never_lets_time_pass(viewer, page):
