@@ -5,8 +5,8 @@ exactly one result line: RESULT_MARKER followed by a JSON object with `"ok": tru
 `"ok": false` with `"error"` (what went wrong and how to fix it) and `"type"` (the exception class).
 Program output printed before the result line (by `run`) is the program's own, streamed as it runs.
 
-Calls: info, set_rtc, stage, stage_begin / stage_append / stage_end, run, runs, read_run, idle,
-record_provenance, set_hub_name, servo_scan, servo_set_id. Binary payloads travel as base64 text,
+Calls: info, set_rtc, stage, stage_begin / stage_append / stage_end, read_file, run, runs, read_run,
+idle, reset, record_provenance, set_hub_name, servo_scan, servo_set_id. Binary payloads travel as base64 text,
 optionally zlib-compressed (the hub has `deflate`), because raw-REPL input is text and base64 of
 compressed bytes is shorter than a Python bytes literal of the originals.
 """
@@ -32,6 +32,11 @@ SERVO_TX = 14
 SERVO_RX = 41
 SERVO_BAUD = 1000000
 READ_CHUNK_BYTES = 8192  # largest slice of a run log returned by one read_run call
+# Largest slice of a file one read_file call returns: the bytes, their base64 text and the JSON line
+# live side by side on the hub while it prints (~4.7x this), so it stays far below its free RAM.
+READ_FILE_MAX_BYTES = 4096
+_S_IFDIR = 0x4000
+RESET_GRACE_MS = 100  # lets the reset reply drain from the UART/BLE buffers before the chip restarts
 
 _REG_ID = 0x05  # STS EEPROM: bus id
 _REG_LOCK = 0x37  # STS: 0 unlocks EEPROM writes, 1 locks them again
@@ -276,6 +281,44 @@ def stage_end(compression=None, size=None, crc32=None):
     return _call(_stage_end, compression, size, crc32)
 
 
+# -- reading a file back -------------------------------------------------------------------------
+
+
+def _read_file(path, offset, size):
+    if not isinstance(path, str) or not path.startswith("/") or path.endswith("/"):
+        raise ValueError("path=%r: give an absolute file path such as /program.py" % (path,))
+    if not isinstance(offset, int) or offset < 0:
+        raise ValueError("offset=%r: give a byte offset of 0 or more" % (offset,))
+    if not isinstance(size, int) or size < 1:
+        raise ValueError("size=%r: give the number of bytes to read (1 or more)" % (size,))
+    try:
+        stat = os.stat(path)
+    except OSError:
+        raise OSError("no file %s on the hub: check the path (names are case-sensitive)" % path) from None
+    if stat[0] & _S_IFDIR:
+        raise OSError("%s on the hub is a directory, not a file: name a file inside it" % path)
+    total = stat[6]
+    with open(path, "rb") as f:
+        f.seek(offset)
+        data = f.read(min(size, READ_FILE_MAX_BYTES))
+    end = offset + len(data)
+    return {
+        "path": path,
+        "offset": offset,
+        "bytes": len(data),
+        "crc32": binascii.crc32(data) & 0xFFFFFFFF,
+        "data": binascii.b2a_base64(data).decode().strip(),
+        "total_bytes": total,
+        "next_offset": end if end < total else None,
+    }
+
+
+def read_file(path, offset=0, size=READ_FILE_MAX_BYTES):
+    """Up to `size` bytes of file `path` from byte `offset`, as base64 with their length and crc32 so
+    the host can verify each slice; call again at `next_offset` until it is None."""
+    return _call(_read_file, path, offset, size)
+
+
 # -- running and the run logs --------------------------------------------------------------------
 
 
@@ -355,6 +398,16 @@ def idle():
         launcher.get().idle()
     except KeyboardInterrupt:
         pass
+
+
+def reset():
+    """Restart the hub as its RESET button would (after a flash, so it comes up advertising its name).
+
+    The reply is printed first and given a moment to leave over the link: the restart cuts it.
+    """
+    _reply({"ok": True, "resetting": True})
+    time.sleep_ms(RESET_GRACE_MS)
+    machine.reset()
 
 
 def record_provenance(verdict):
