@@ -223,12 +223,13 @@ static void plan_passive_axis(ob_drivebase_axis_t *axis, float x0, float v0, flo
 }
 
 bool ob_drivebase_straight(ob_drivebase_t *db, float distance_mm, ob_then_t then) {
-    if (!isfinite(distance_mm)) {
-        return false;
+    float travel_deg = distance_mm * db->deg_per_mm;
+    if (!isfinite(travel_deg)) {
+        return false; /* not finite, or too far to express in float wheel-degrees */
     }
     float s0, vs0, d0, vd0;
     begin_command(db, &s0, &vs0, &d0, &vd0);
-    db->sum.target_deg = s0 + distance_mm * db->deg_per_mm;
+    db->sum.target_deg = s0 + travel_deg;
     set_limits(&db->sum, db->straight_speed_dps, db->acceleration_dps2);
     ob_trajectory_plan_move(&db->sum.trajectory, s0, vs0, db->sum.target_deg, db->straight_speed_dps,
                             db->acceleration_dps2, db->acceleration_dps2, then == OB_THEN_CONTINUE);
@@ -239,12 +240,13 @@ bool ob_drivebase_straight(ob_drivebase_t *db, float distance_mm, ob_then_t then
 }
 
 bool ob_drivebase_turn(ob_drivebase_t *db, float angle_deg, ob_then_t then) {
-    if (!isfinite(angle_deg)) {
+    float turn_deg = angle_deg * db->diff_per_heading;
+    if (!isfinite(turn_deg)) {
         return false;
     }
     float s0, vs0, d0, vd0;
     begin_command(db, &s0, &vs0, &d0, &vd0);
-    db->diff.target_deg = d0 + angle_deg * db->diff_per_heading;
+    db->diff.target_deg = d0 + turn_deg;
     set_limits(&db->diff, db->turn_rate_dps, db->turn_acceleration_dps2);
     ob_trajectory_plan_move(&db->diff.trajectory, d0, vd0, db->diff.target_deg, db->turn_rate_dps,
                             db->turn_acceleration_dps2, db->turn_acceleration_dps2, false);
@@ -261,12 +263,15 @@ bool ob_drivebase_curve(ob_drivebase_t *db, float radius_mm, float angle_deg, ob
     if (radius_mm == 0.0f) {
         return ob_drivebase_turn(db, angle_deg, then);
     }
-    float s0, vs0, d0, vd0;
-    begin_command(db, &s0, &vs0, &d0, &vd0);
     float radius_abs = fabsf(radius_mm);
     float distance_mm = signf(radius_mm) * radius_abs * fabsf(angle_deg) * (OB_DB_PI / 180.0f);
     float sum_deg = distance_mm * db->deg_per_mm;
     float diff_deg = angle_deg * db->diff_per_heading;
+    if (!isfinite(sum_deg) || !isfinite(diff_deg)) {
+        return false;
+    }
+    float s0, vs0, d0, vd0;
+    begin_command(db, &s0, &vs0, &d0, &vd0);
     /* The outer wheel runs at centre * (1 + track / 2|R|): scale so it meets the settings exactly. */
     float scale = radius_abs / (radius_abs + 0.5f * db->axle_track_mm);
     db->sum.target_deg = s0 + sum_deg;

@@ -207,7 +207,8 @@ void ob_drivebase_set_gains(ob_drivebase_t *db, bool heading_axis, const ob_driv
  * Moves. Each supersedes whatever was running and starts from the current
  * reference when the controller is active (so chained moves are seamless),
  * or from the measured state when it was idle. They return false, changing
- * nothing, for non-finite arguments.
+ * nothing, for non-finite arguments and for ones whose wheel-degrees overflow
+ * float.
  *
  * straight: forward distance_mm at straight_speed; heading held.
  * turn: angle_deg of body heading at turn_rate, in place. then="continue"

@@ -82,6 +82,27 @@ def test_non_finite_distances_are_refused_before_anything_moves():
     assert db.done()
 
 
+@pytest.mark.parametrize(
+    ("command", "message"),
+    [
+        (lambda db: db.straight(1e39), "distance_mm is beyond the float range"),
+        (lambda db: db.straight(2e38), r"straight\(\): the values are too large"),
+        (lambda db: db.turn(3e38), r"turn\(\): the values are too large"),
+        (lambda db: db.curve(1e38, 1e38), r"curve\(\): the values are too large"),
+        (lambda db: db.drive(3e38, 0), r"drive\(\): the values are too large"),
+        (lambda db: db.move_wheels(3e38, 3e38), r"move_wheels\(\): the values are too large"),
+    ],
+)
+def test_magnitudes_that_overflow_the_controller_are_refused_not_ignored(command, message):
+    # Finite in Python, but infinite once in float wheel-degrees: the core refuses the command, and
+    # the caller must hear about it instead of a robot that silently does nothing.
+    db = native.DriveBase(56, 114)
+    db.update(0, 0.0, 0.0)
+    with pytest.raises(ValueError, match=message):
+        command(db)
+    assert db.done() and db.update(1, 0.0, 0.0) == (None, None), "nothing was armed"
+
+
 def test_update_takes_readings_or_none_and_checks_its_arguments():
     db = native.DriveBase(56, 114)
     assert db.update(0, 0.0, 0.0) == (None, None), "idle: both wheels released"

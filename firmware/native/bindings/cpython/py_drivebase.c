@@ -14,6 +14,7 @@
  *     each a duty percent or None for a released (coasting) wheel. This path
  *     makes no Python calls at all.
  */
+#include <float.h>
 #include <math.h>
 
 #include "bindings.h"
@@ -85,8 +86,25 @@ static int finite_arg(PyObject *obj, const char *what, float *out) {
         PyErr_Format(PyExc_ValueError, "%s must be a finite number, got %R", what, obj);
         return -1;
     }
+    if (fabs(v) > FLT_MAX) {
+        PyErr_Format(PyExc_ValueError, "%s is beyond the float range of the controller (|x| <= 3.4e38), got %R",
+                     what, obj);
+        return -1;
+    }
     *out = (float)v;
     return 0;
+}
+
+/* The core refuses a command whose wheel-degrees overflow float (a distance of 1e38 mm): say so. */
+static PyObject *done_or_refused(bool accepted, const char *what) {
+    if (!accepted) {
+        PyErr_Format(PyExc_ValueError,
+                     "%s: the values are too large for the drive base (its wheel-degrees overflow float); "
+                     "nothing was changed",
+                     what);
+        return NULL;
+    }
+    Py_RETURN_NONE;
 }
 
 static int positive_arg(PyObject *obj, const char *what, const char *unit, float *out) {
@@ -389,8 +407,7 @@ static PyObject *DriveBase_straight(DriveBaseObject *self, PyObject *args, PyObj
     if (finite_arg(distance_obj, "straight(): distance_mm", &distance_mm) < 0 || parse_then(then_obj, &then) < 0) {
         return NULL;
     }
-    ob_drivebase_straight(&self->db, distance_mm, then);
-    Py_RETURN_NONE;
+    return done_or_refused(ob_drivebase_straight(&self->db, distance_mm, then), "straight()");
 }
 
 static PyObject *DriveBase_turn(DriveBaseObject *self, PyObject *args, PyObject *kwargs) {
@@ -404,8 +421,7 @@ static PyObject *DriveBase_turn(DriveBaseObject *self, PyObject *args, PyObject 
     if (finite_arg(angle_obj, "turn(): angle_deg", &angle_deg) < 0 || parse_then(then_obj, &then) < 0) {
         return NULL;
     }
-    ob_drivebase_turn(&self->db, angle_deg, then);
-    Py_RETURN_NONE;
+    return done_or_refused(ob_drivebase_turn(&self->db, angle_deg, then), "turn()");
 }
 
 static PyObject *DriveBase_curve(DriveBaseObject *self, PyObject *args, PyObject *kwargs) {
@@ -420,8 +436,7 @@ static PyObject *DriveBase_curve(DriveBaseObject *self, PyObject *args, PyObject
         finite_arg(angle_obj, "curve(): angle (deg)", &angle_deg) < 0 || parse_then(then_obj, &then) < 0) {
         return NULL;
     }
-    ob_drivebase_curve(&self->db, radius_mm, angle_deg, then);
-    Py_RETURN_NONE;
+    return done_or_refused(ob_drivebase_curve(&self->db, radius_mm, angle_deg, then), "curve()");
 }
 
 static PyObject *DriveBase_drive(DriveBaseObject *self, PyObject *args, PyObject *kwargs) {
@@ -435,8 +450,7 @@ static PyObject *DriveBase_drive(DriveBaseObject *self, PyObject *args, PyObject
         finite_arg(rate_obj, "drive(): turn_rate_dps", &turn_rate_dps) < 0) {
         return NULL;
     }
-    ob_drivebase_drive(&self->db, speed_mm_s, turn_rate_dps);
-    Py_RETURN_NONE;
+    return done_or_refused(ob_drivebase_drive(&self->db, speed_mm_s, turn_rate_dps), "drive()");
 }
 
 static PyObject *DriveBase_move_wheels(DriveBaseObject *self, PyObject *args, PyObject *kwargs) {
@@ -450,8 +464,7 @@ static PyObject *DriveBase_move_wheels(DriveBaseObject *self, PyObject *args, Py
         finite_arg(right_obj, "move_wheels(): right_wheel_speed (wheel-deg/s)", &right_dps) < 0) {
         return NULL;
     }
-    ob_drivebase_move_wheels(&self->db, left_dps, right_dps);
-    Py_RETURN_NONE;
+    return done_or_refused(ob_drivebase_move_wheels(&self->db, left_dps, right_dps), "move_wheels()");
 }
 
 static PyObject *DriveBase_stop(DriveBaseObject *self, PyObject *args, PyObject *kwargs) {

@@ -38,6 +38,17 @@ static float finite_arg(mp_obj_t obj, const char *where, const char *name) {
     return ob_mp_float(obj, where, name);
 }
 
+/* The core refuses a command whose wheel-degrees overflow float (a distance of 1e38 mm): say so. */
+static mp_obj_t done_or_refused(bool accepted, const char *where) {
+    if (!accepted) {
+        mp_raise_msg_varg(&mp_type_ValueError,
+                          MP_ERROR_TEXT("%s: the values are too large for the drive base (its wheel-degrees overflow "
+                                        "float); nothing was changed"),
+                          where);
+    }
+    return mp_const_none;
+}
+
 static ob_then_t then_arg(mp_obj_t obj, const char *where) {
     return obj == MP_OBJ_NULL ? OB_THEN_COAST : ob_mp_then(obj, where);
 }
@@ -253,12 +264,8 @@ static mp_obj_t one_value_move(size_t n_args, const mp_obj_t *pos_args, mp_map_t
     const char *where = turn ? "DriveBase.turn" : "DriveBase.straight";
     float value = finite_arg(args[1].u_obj, where, qstr_str(value_name));
     ob_then_t then = then_arg(args[2].u_obj, where);
-    if (turn) {
-        ob_drivebase_turn(&self->db, value, then);
-    } else {
-        ob_drivebase_straight(&self->db, value, then);
-    }
-    return mp_const_none;
+    bool accepted = turn ? ob_drivebase_turn(&self->db, value, then) : ob_drivebase_straight(&self->db, value, then);
+    return done_or_refused(accepted, where);
 }
 
 static mp_obj_t drivebase_straight(size_t n_args, const mp_obj_t *pos_args, mp_map_t *kw_args) {
@@ -284,8 +291,7 @@ static mp_obj_t drivebase_curve(size_t n_args, const mp_obj_t *pos_args, mp_map_
     static const char *where = "DriveBase.curve";
     float radius_mm = finite_arg(args[1].u_obj, where, "radius (mm)");
     float angle_deg = finite_arg(args[2].u_obj, where, "angle (deg)");
-    ob_drivebase_curve(&self->db, radius_mm, angle_deg, then_arg(args[3].u_obj, where));
-    return mp_const_none;
+    return done_or_refused(ob_drivebase_curve(&self->db, radius_mm, angle_deg, then_arg(args[3].u_obj, where)), where);
 }
 static MP_DEFINE_CONST_FUN_OBJ_KW(drivebase_curve_obj, 1, drivebase_curve);
 
@@ -302,12 +308,9 @@ static mp_obj_t two_speeds(size_t n_args, const mp_obj_t *pos_args, mp_map_t *kw
     const char *where = wheels ? "DriveBase.move_wheels" : "DriveBase.drive";
     float first = finite_arg(args[1].u_obj, where, qstr_str(a));
     float second = finite_arg(args[2].u_obj, where, qstr_str(b));
-    if (wheels) {
-        ob_drivebase_move_wheels(&self->db, first, second);
-    } else {
-        ob_drivebase_drive(&self->db, first, second);
-    }
-    return mp_const_none;
+    bool accepted = wheels ? ob_drivebase_move_wheels(&self->db, first, second)
+                           : ob_drivebase_drive(&self->db, first, second);
+    return done_or_refused(accepted, where);
 }
 
 static mp_obj_t drivebase_drive(size_t n_args, const mp_obj_t *pos_args, mp_map_t *kw_args) {
