@@ -114,6 +114,17 @@ static void plan_to_rest(ob_trajectory_t *tr, float x0, float target, float dir,
     float dt2 = v_peak / decel;
     float d2 = 0.5f * v_peak * dt2;
     float d1 = distance - d0 - d2;
+    if (d1 < 0.0f && u0 + v_peak > 0.0f && distance > d2) {
+        /*
+         * No room to cruise, and the phases overshoot the distance by rounding alone. When v_peak
+         * is close to u0, their difference keeps few significant bits, and divided by a small
+         * acceleration that error is a visible step where phase 0 meets phase 2 (0.0005 deg for
+         * 716 -> 716.002 deg/s at 13 deg/s^2). Phase 0 takes what distance is left instead, at the
+         * acceleration that makes it end exactly at v_peak.
+         */
+        dt0 = 2.0f * (distance - d2) / (u0 + v_peak);
+        a0 = dt0 > 0.0f ? fabsf(v_peak - u0) / dt0 : a0;
+    }
     float dt1 = (d1 > 0.0f && v_peak > 0.0f) ? d1 / v_peak : 0.0f;
     store(tr, x0, dir, u0, u0 > v_peak ? -a0 : a0, dt0, v_peak, dt1, -decel, dt2, target, 0.0f);
 }
