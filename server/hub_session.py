@@ -25,7 +25,8 @@ from typing import Any, TypeVar
 from openbricks_server.errors import CliError
 from openbricks_server.hub_lock import hub_lock
 from openbricks_server.link import HubCallError, HubNotFound, LinkDropped, LinkError, LinkTimeout
-from openbricks_server.link.raw_repl import HubInfo, RawRepl
+from openbricks_server.link.host_call import HubInfo
+from openbricks_server.link.raw_repl import RawRepl
 
 T = TypeVar("T")
 CONNECT_TIMEOUT_S = 20.0

@@ -4,7 +4,7 @@ It speaks the REPL the way the hub's `pyexec.c` does (friendly REPL, raw REPL, r
 flow-control window, Ctrl-C / Ctrl-D semantics, soft reboot) and executes commands with CPython in
 a worker thread, so output streams while a command runs and Ctrl-C interrupts it. Behind the REPL,
 `openbricks.host_calls` is an in-memory model of the hub's calls (info, set_rtc, staging with
-base64 + zlib + crc32 verification, run); a staged program is Python source that runs with an
+base64 + zlib + crc32 verification, read_file, run); a staged program is Python source that runs with an
 interruptible `sleep_ms`.
 
 It enforces what a real hub would punish: bytes beyond the raw-paste credit (plus the few bytes of
@@ -67,6 +67,10 @@ class ScriptedHub:
         self._pending = bytearray()  # input that arrived while a command ran
         self._interrupt = threading.Event()
         self._staging: dict | None = None
+        #: Most bytes one read_file reply carries (the real hub's READ_FILE_MAX_BYTES).
+        self.read_cap_bytes = 4096
+        #: Hook for tests: what read_file sends instead of a slice's bytes (a damaged link).
+        self.corrupt_read: Callable[[bytes], bytes] = lambda data: data
 
     # -- wiring ---------------------------------------------------------------------------------
 
@@ -353,6 +357,25 @@ class _HostCalls:
             )
 
         return self._call(_end)
+
+    def read_file(self, path, offset=0, size=4096):
+        def _read():
+            if path not in self.hub.files:
+                raise OSError(f"no file {path} on the hub: check the path (names are case-sensitive)")
+            whole = self.hub.files[path]
+            data = whole[offset : offset + min(size, self.hub.read_cap_bytes)]
+            end = offset + len(data)
+            return {
+                "path": path,
+                "offset": offset,
+                "bytes": len(data),
+                "crc32": zlib.crc32(data),
+                "data": base64.b64encode(self.hub.corrupt_read(data)).decode(),
+                "total_bytes": len(whole),
+                "next_offset": end if end < len(whole) else None,
+            }
+
+        return self._call(_read)
 
     def run(self, path="/program.mpy"):
         hub = self.hub

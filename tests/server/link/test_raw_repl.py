@@ -1,14 +1,13 @@
 """The raw-REPL client against an emulated hub that speaks MicroPython's REPL byte for byte."""
 
 import asyncio
-import base64
 import os
 import zlib
 
 import pytest
 
-from openbricks_server.link import HubCallError, HubException, LinkError, LinkTimeout, ProtocolError
-from openbricks_server.link.raw_repl import RawRepl, _ResultLines, call_source, python_literal
+from openbricks_server.link import HubCallError, HubException, LinkTimeout, ProtocolError
+from openbricks_server.link.raw_repl import RawRepl
 from tests.server.link.loopback import LoopbackLink
 from tests.server.link.scripted_hub import ScriptedHub
 
@@ -245,13 +244,46 @@ def test_ctrl_c_stops_a_run_and_the_stop_is_an_outcome():
     run(scenario())
 
 
-def test_get_reads_back_a_file_and_names_a_missing_one():
+def test_get_reads_back_a_file_through_read_file_calls_with_data_only():
     async def scenario():
         hub, _, repl = await session()
-        hub.files["/data.bin"] = os.urandom(5000)
-        assert await repl.get("/data.bin") == hub.files["/data.bin"]
-        with pytest.raises(LinkError, match="RobotA has no readable file /nope"):
+        hub.files["/data.bin"] = os.urandom(9000)
+        before = len(hub.commands)
+        assert await repl.get("/data.bin", block_bytes=2048) == hub.files["/data.bin"]
+        sent = hub.commands[before:]
+        assert len(sent) == 5  # 9000 bytes in 2048-byte slices
+        assert all(
+            c.startswith("import openbricks.host_calls as h;h.read_file(path='/data.bin'") for c in sent
+        )
+        assert "offset=8192, size=2048" in sent[-1]
+
+    run(scenario())
+
+
+def test_get_follows_the_hubs_own_slice_cap_and_reads_empty_files():
+    async def scenario():
+        hub, _, repl = await session()
+        hub.read_cap_bytes = 1000
+        hub.files["/log.txt"] = b"line\n" * 700
+        hub.files["/empty"] = b""
+        assert await repl.get("/log.txt") == hub.files["/log.txt"]
+        assert await repl.get("/empty") == b""
+
+    run(scenario())
+
+
+def test_get_names_a_missing_file_and_refuses_a_damaged_slice():
+    async def scenario():
+        hub, _, repl = await session()
+        with pytest.raises(
+            HubCallError, match="read_file on RobotA failed \\(OSError\\): no file /nope on the hub"
+        ):
             await repl.get("/nope")
+        hub.files["/data.bin"] = bytes(6000)
+        hub.corrupt_read = lambda data: data[:-1] + b"\x01" if len(data) < 4096 else data
+        with pytest.raises(ProtocolError, match="/data.bin from RobotA arrived damaged at offset 4096"):
+            await repl.get("/data.bin")
+        assert (await repl.exec("print('ok')")).stdout == b"ok\r\n"  # the session goes on
 
     run(scenario())
 
@@ -283,30 +315,3 @@ def test_garbage_during_a_paste_is_a_protocol_error():
             await repl.put("/x.bin", os.urandom(2000), compress=False)
 
     run(scenario())
-
-
-def test_result_lines_are_found_across_chunk_boundaries():
-    shown = []
-    lines = _ResultLines(shown.append)
-    for piece in (b"@open", b"bricks-res", b'ult {"ok": true, "n": 1}\r\n', b"@ not a result\r\n"):
-        lines.feed(piece)
-    lines.finish()
-    assert lines.results == [{"ok": True, "n": 1}]
-    assert b"".join(shown) == b"@ not a result\r\n"
-
-
-def test_host_call_arguments_are_data_only():
-    assert call_source("stage", {"payload": "QUJD", "size": 3, "compression": None}) == (
-        "import openbricks.host_calls as h;h.stage(payload='QUJD', size=3, compression=None)"
-    )
-    assert python_literal({"a": [1, 2.5, True]}) == "{'a': [1, 2.5, True]}"
-    with pytest.raises(ValueError, match="only finite numbers"):
-        python_literal(float("nan"))
-    with pytest.raises(ValueError, match="cannot be sent to the hub as data"):
-        python_literal(object())
-    with pytest.raises(ValueError, match="not a Python identifier"):
-        call_source("info(); import os", {})
-    # quotes and control characters in data stay inside the literal
-    tricky = "it's \x04 \x03 done"
-    assert eval(python_literal(tricky)) == tricky  # noqa: S307 - checking the literal round-trips
-    assert base64.b64decode(eval(python_literal(base64.b64encode(b"\x00\xff").decode()))) == b"\x00\xff"  # noqa: S307
