@@ -6,9 +6,9 @@ exactly one result line: RESULT_MARKER followed by a JSON object with `"ok": tru
 Program output printed before the result line (by `run`) is the program's own, streamed as it runs.
 
 Calls: info, set_rtc, stage, stage_begin / stage_append / stage_end, read_file, run, runs, read_run,
-idle, reset, record_provenance, set_hub_name, servo_scan, servo_set_id. Binary payloads travel as base64 text,
-optionally zlib-compressed (the hub has `deflate`), because raw-REPL input is text and base64 of
-compressed bytes is shorter than a Python bytes literal of the originals.
+idle, reset, paste_probe, record_provenance, set_hub_name, servo_scan, servo_set_id. Binary payloads
+travel as base64 text, optionally zlib-compressed (the hub has `deflate`), because raw-REPL input is
+text and base64 of compressed bytes is shorter than a Python bytes literal of the originals.
 """
 
 import binascii
@@ -408,6 +408,19 @@ def reset():
     _reply({"ok": True, "resetting": True})
     time.sleep_ms(RESET_GRACE_MS)
     machine.reset()
+
+
+def paste_probe(token, padding):
+    """Echo `token` and how many bytes of `padding` arrived: `openbricks paste-probe` sends calls of
+    growing size through raw-paste and compares, so a command cut short shows as a wrong count (or as
+    the SyntaxError of an unterminated string), never as a silent success."""
+
+    def _probe():
+        if not isinstance(token, str) or not isinstance(padding, str):
+            raise ValueError("token and padding must be text")
+        return {"token": token, "padding_bytes": len(padding)}
+
+    return _call(_probe)
 
 
 def record_provenance(verdict):

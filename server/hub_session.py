@@ -24,7 +24,14 @@ from typing import Any, TypeVar
 
 from openbricks_server.errors import CliError
 from openbricks_server.hub_lock import hub_lock
-from openbricks_server.link import HubCallError, HubNotFound, LinkDropped, LinkError, LinkTimeout
+from openbricks_server.link import (
+    HubCallError,
+    HubException,
+    HubNotFound,
+    LinkDropped,
+    LinkError,
+    LinkTimeout,
+)
 from openbricks_server.link.host_call import HubInfo
 from openbricks_server.link.raw_repl import RawRepl
 
@@ -206,10 +213,16 @@ async def set_up_flashed_hub(port: str, name: str, provenance: str, qtr_calibrat
             recorded = await repl.call("record_provenance", verdict=provenance)
             if qtr_calibration is not None:
                 await repl.put("/qtr.cal", qtr_calibration)
-            await link.write(b"import machine\r\nmachine.reset()\r\n\x04")  # no answer comes: it resets
+            await repl.reset_hub()  # it comes back up advertising its new name
             return {"hub_name": named["hub_name"], "firmware": recorded["firmware"]}
         except HubCallError as exc:
             raise CliError(f"the flashed hub on {port} refused {exc.call}: {exc.error}") from None
+        except HubException as exc:  # a host call it lacks: not a hub that is still booting
+            last = exc.traceback.strip().splitlines()[-1] if exc.traceback.strip() else "an error"
+            raise CliError(
+                f"the flashed hub on {port} raised {last} while being set up; its firmware may be older "
+                "than this openbricks: flash a current release"
+            ) from None
         except (LinkError, OSError) as exc:  # not up yet: still booting
             last_error = exc
             await asyncio.sleep(0.5)

@@ -1,9 +1,10 @@
-"""`openbricks paste-probe`: the largest program the hub's raw-paste path takes, and how failures look.
+"""`openbricks paste-probe`: the largest command the hub's raw-paste path takes, and how failures look.
 
-Do-nothing programs of doubling size (padded with comment lines, ending in one print of a token) go
-through the real raw-paste path. A size passes when the token comes back; otherwise the failure is
-"truncated" (the hub ran or parsed a cut program: an error instead of the token) or "hung" (nothing
-within --timeout). After a failure the REPL is re-entered so the next size starts clean.
+Do-nothing commands of doubling size go through the real raw-paste path: each is the hub's
+`paste_probe` host call with a token and padding text, sized to the byte. A size passes when the
+hub echoes the token and counts every padding byte; otherwise the failure is "truncated" (the hub
+parsed a cut command: an error, or fewer bytes than sent) or "hung" (nothing within --timeout).
+After a failure the REPL is re-entered so the next size starts clean.
 """
 
 from __future__ import annotations
@@ -11,23 +12,20 @@ from __future__ import annotations
 import asyncio
 import time
 
-from openbricks_server.errors import EXIT_FAILED, EXIT_OK
+from openbricks_server.errors import EXIT_FAILED, EXIT_OK, CliError
 from openbricks_server.hub_session import with_hub
 from openbricks_server.link import HubException, LinkTimeout
+from openbricks_server.link.host_call import call_source
 
 FIRST_SIZE = 256
 
 
-def padded_program(size: int, token: str) -> bytes:
-    """Exactly `size` bytes (when larger than the final print): comment lines, then the print."""
-    tail = f"print({token!r})\n".encode()
-    room = size - len(tail)
-    lines = []
-    while room > 0:
-        n = min(64, room)
-        lines.append(b"#" + b"." * (n - 2) + b"\n" if n >= 2 else b"\n")
-        room -= n
-    return b"".join(lines) + tail
+def probe_command(size: int, token: str) -> tuple[bytes, int]:
+    """The `paste_probe` call that is exactly `size` bytes (when larger than the bare call), and how
+    many padding bytes it carries."""
+    bare = len(call_source("paste_probe", {"token": token, "padding": ""}))
+    padding = max(size - bare, 0)
+    return call_source("paste_probe", {"token": token, "padding": "." * padding}).encode(), padding
 
 
 def sizes(max_bytes: int) -> list[int]:
@@ -43,20 +41,31 @@ async def _probe(session, max_bytes: int, timeout_s: float):
     results = []
     for size in sizes(max_bytes):
         token = f"paste-probe-{size}"
-        program = padded_program(size, token)
+        command, padding = probe_command(size, token)
         started = time.perf_counter()
         try:
-            result = await repl.exec(program, timeout_s=timeout_s)
-            ok = token.encode() in result.stdout
-            verdict = "ok" if ok else "truncated (ran without printing the token)"
+            result = await repl.exec(command, timeout_s=timeout_s)
+            reply = result.results[-1] if result.results else {}
+            ok = reply.get("token") == token and reply.get("padding_bytes") == padding
+            if ok:
+                verdict = "ok"
+            elif "padding_bytes" in reply:
+                verdict = f"truncated (the hub got {reply['padding_bytes']} of {padding} padding bytes)"
+            else:
+                verdict = "truncated (ran without echoing the token)"
         except HubException as exc:
-            ok, verdict = False, f"truncated ({exc.traceback.strip().splitlines()[-1]})"
+            last = exc.traceback.strip().splitlines()[-1] if exc.traceback.strip() else "an error"
+            if "AttributeError" in last and "paste_probe" in last:
+                raise CliError(
+                    f"{session.name}'s firmware has no paste_probe host call: flash a current release"
+                ) from None
+            ok, verdict = False, f"truncated ({last})"
         except LinkTimeout:
             ok, verdict = False, f"hung (no answer within {timeout_s:g} s)"
         elapsed = time.perf_counter() - started
-        rate = f"{len(program) / elapsed / 1024:7.1f} KB/s" if ok and elapsed > 0 else ""
-        print(f"{len(program):>7} bytes  {verdict:<12} {rate}".rstrip(), flush=True)
-        results.append((len(program), ok))
+        rate = f"{len(command) / elapsed / 1024:7.1f} KB/s" if ok and elapsed > 0 else ""
+        print(f"{len(command):>7} bytes  {verdict:<12} {rate}".rstrip(), flush=True)
+        results.append((len(command), ok))
         if not ok:
             await repl.enter(timeout_s=timeout_s)
     window = repl.paste_window

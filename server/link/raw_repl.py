@@ -303,6 +303,27 @@ class RawRepl:
     async def set_rtc(self, epoch_ms: int, *, timeout_s: float | None = None) -> dict:
         return await self.call("set_rtc", epoch_ms=int(epoch_ms), timeout_s=timeout_s)
 
+    async def reset_hub(self, *, timeout_s: float | None = None) -> dict:
+        """Restart the hub through its `reset` call and return its confirmation.
+
+        The hub replies and then restarts, so the command never ends the usual way: the reply line
+        itself is what is awaited. The session is over afterwards (a USB link drops with the chip).
+        """
+        timeout_s = self.timeout_s if timeout_s is None else timeout_s
+        await self._await_prompt(timeout_s)
+        await self.input.send_plain_raw(call_source("reset", {}).encode(), timeout_s)
+        lines = ResultLines(None)
+        while not lines.results:
+            line = await self.link.read_until(b"\n", "the hub's reply to reset", timeout_s)
+            if CTRL_D in line:  # the command ended instead of restarting the hub: it raised
+                stderr = line.split(CTRL_D, 1)[1] + b"\n"
+                stderr += await self.link.read_until(CTRL_D, "the error output of reset", timeout_s)
+                self._prompt_pending = True
+                raise HubException(self.hub, stderr.decode("utf-8", "replace"), bytes(lines.output))
+            lines.feed(line + b"\n")
+        self._prompt_pending = False
+        return single_result(self.hub, "reset", lines.results, bytes(lines.output))
+
     async def run(
         self,
         path: str | None = None,

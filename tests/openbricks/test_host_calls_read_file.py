@@ -1,4 +1,4 @@
-"""Reading a hub file back for the host (`get`), and the host's reset: verified slices, clear refusals."""
+"""Reading a hub file back for the host (`get`), the paste probe and the host's reset."""
 
 import binascii
 import json
@@ -112,3 +112,9 @@ def test_reset_replies_first_then_restarts_the_hub():
     assert len(console.lines) == 1 and console.lines[0].startswith(marker)
     assert json.loads(console.lines[0][len(marker) :]) == {"ok": True, "resetting": True}
     assert machine.board.resets == 1
+
+
+def test_paste_probe_echoes_the_token_and_counts_the_padding_that_arrived():
+    reply = host_calls.paste_probe("paste-probe-512", "." * 480)
+    assert reply["ok"] and reply["token"] == "paste-probe-512" and reply["padding_bytes"] == 480
+    assert "must be text" in host_calls.paste_probe("t", 5)["error"]

@@ -4,8 +4,8 @@ It speaks the REPL the way the hub's `pyexec.c` does (friendly REPL, raw REPL, r
 flow-control window, Ctrl-C / Ctrl-D semantics, soft reboot) and executes commands with CPython in
 a worker thread, so output streams while a command runs and Ctrl-C interrupts it. Behind the REPL,
 `openbricks.host_calls` is an in-memory model of the hub's calls (info, set_rtc, staging with
-base64 + zlib + crc32 verification, read_file, run); a staged program is Python source that runs with an
-interruptible `sleep_ms`.
+base64 + zlib + crc32 verification, read_file, reset, run); a staged program is Python source that
+runs with an interruptible `sleep_ms`.
 
 It enforces what a real hub would punish: bytes beyond the raw-paste credit (plus the few bytes of
 slack the hub's stdin ring has) are dropped and counted in `overflow_bytes`, as the ring would.
@@ -67,6 +67,9 @@ class ScriptedHub:
         self._pending = bytearray()  # input that arrived while a command ran
         self._interrupt = threading.Event()
         self._staging: dict | None = None
+        #: Host calls this hub's firmware lacks (an older release): calling one raises AttributeError.
+        self.missing_calls: set[str] = set()
+        self.resets = 0
         #: Most bytes one read_file reply carries (the real hub's READ_FILE_MAX_BYTES).
         self.read_cap_bytes = 4096
         #: Hook for tests: what read_file sends instead of a slice's bytes (a damaged link).
@@ -206,12 +209,23 @@ class ScriptedHub:
         namespace = {"__name__": "__main__", "__builtins__": self._builtins()}
         try:
             exec(compile(text, "<stdin>", "exec"), namespace)  # noqa: S102 - the emulated hub runs host code
+        except _HardReset:
+            self._post(self._boot)
+            return
         except KeyboardInterrupt:
             stderr = TRACEBACK_HEAD + b"KeyboardInterrupt: \r\n"
         except BaseException as exc:  # noqa: BLE001 - every error is reported as the hub would
             lines = traceback.format_exception_only(type(exc), exc)
             stderr = TRACEBACK_HEAD + "".join(lines).replace("\n", "\r\n").encode()
         self._post(self._finish, b"", stderr)
+
+    def _boot(self) -> None:
+        """After machine.reset(): a fresh hub in the friendly REPL, as after power-on."""
+        self.resets += 1
+        self._staging = None
+        self._pending.clear()
+        self._mode = "friendly"
+        self._send(b"\r\n" + FRIENDLY_BANNER)
 
     def _finish(self, stdout: bytes, stderr: bytes) -> None:
         self._send(stdout + b"\x04" + stderr + b"\x04>")
@@ -259,6 +273,10 @@ class ScriptedHub:
         return names
 
 
+class _HardReset(BaseException):
+    """machine.reset() in a command: the chip restarts, the command never ends."""
+
+
 class _Package:
     def __init__(self, **modules):
         self.__dict__.update(modules)
@@ -269,6 +287,11 @@ class _HostCalls:
 
     def __init__(self, hub: ScriptedHub):
         self.hub = hub
+
+    def __getattribute__(self, name: str):
+        if name in object.__getattribute__(self, "hub").missing_calls:
+            raise AttributeError(f"'module' object has no attribute '{name}'")
+        return object.__getattribute__(self, name)
 
     def _reply(self, result: dict) -> dict:
         self.hub._stdout(RESULT_MARKER + json.dumps(result) + "\n")
@@ -376,6 +399,10 @@ class _HostCalls:
             }
 
         return self._call(_read)
+
+    def reset(self):
+        self._reply({"ok": True, "resetting": True})
+        raise _HardReset
 
     def run(self, path="/program.mpy"):
         hub = self.hub

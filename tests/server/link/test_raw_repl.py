@@ -288,6 +288,31 @@ def test_get_names_a_missing_file_and_refuses_a_damaged_slice():
     run(scenario())
 
 
+def test_reset_hub_returns_the_hubs_confirmation_and_the_restarted_hub_takes_a_new_session():
+    async def scenario():
+        hub, _, repl = await session()
+        assert await repl.reset_hub() == {"ok": True, "resetting": True}
+        assert hub.commands[-1] == "import openbricks.host_calls as h;h.reset()"
+        await asyncio.sleep(0.05)
+        assert hub.resets == 1
+        await repl.enter()
+        assert (await repl.exec("print('back')")).stdout == b"back\r\n"
+
+    run(scenario())
+
+
+def test_reset_hub_on_firmware_without_the_call_raises_the_hubs_error_and_the_session_goes_on():
+    async def scenario():
+        hub, _, repl = await session()
+        hub.missing_calls.add("reset")
+        with pytest.raises(HubException, match="AttributeError: 'module' object has no attribute 'reset'"):
+            await repl.reset_hub(timeout_s=2)
+        assert hub.resets == 0
+        assert (await repl.exec("print('still')")).stdout == b"still\r\n"
+
+    run(scenario())
+
+
 def test_a_hub_that_never_answers_times_out_naming_the_wait():
     async def scenario():
         hub = ScriptedHub("RobotA")
