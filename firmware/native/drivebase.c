@@ -517,7 +517,9 @@ static bool estimate(ob_drivebase_t *db, const ob_drivebase_feedback_t *fb, uint
  * base was not being ticked (unsubscribed while another controller drove the
  * wheels): the robot may stand elsewhere and the plan's start lies in the
  * past, so following it would drive back to where the robot was. Carry the
- * command over to where the robot is now, starting now, from rest.
+ * command over to where the robot is now, starting now, at the speeds it was
+ * planned to start at (what this drive base last did: at rest after a
+ * hand-over, at speed after a stall of its caller).
  */
 static void confirm_plan(ob_drivebase_t *db) {
     if (!db->plan_unconfirmed) {
@@ -527,14 +529,14 @@ static void confirm_plan(ob_drivebase_t *db) {
     if ((uint32_t)(db->now_ms - db->start_ms) <= db->watchdog_ms) {
         return;
     }
-    for (int i = 0; i < 2; i++) {
-        ob_observer_reset(&db->observer[i], db->observer[i].x_deg);
-    }
-    db->sum_dps = 0.0f;
-    db->diff_dps = 0.0f;
     shift_axis(&db->sum, db->plan_sum_deg - db->sum_deg);
     shift_axis(&db->diff, db->plan_diff_deg - db->diff_deg);
     db->start_ms = db->now_ms;
+    /* The observers' speeds over the gap are averages that may include someone else's move. */
+    db->sum_dps = db->sum.trajectory.v_dps[0];
+    db->diff_dps = db->diff.trajectory.v_dps[0];
+    db->observer[OB_DB_LEFT].v_dps = db->sum_dps + db->diff_dps;
+    db->observer[OB_DB_RIGHT].v_dps = db->sum_dps - db->diff_dps;
 }
 
 /* OB_DB_FAULT_* bits of every feedback silent for longer than the watchdog allows. */

@@ -160,10 +160,7 @@ static float capped_speed(const ob_servo_t *s, float speed_dps) {
     return clampf(speed_dps, s->cfg.max_speed_dps);
 }
 
-static void plan(ob_servo_t *s, bool was_tracking) {
-    float x0;
-    float v0;
-    start_state(s, was_tracking, &x0, &v0);
+static void plan_from(ob_servo_t *s, float x0, float v0) {
     s->start_ms = s->now_ms;
     s->needs_plan = false;
     if (s->mode == OB_SERVO_SPEED) {
@@ -185,6 +182,13 @@ static void plan(ob_servo_t *s, bool was_tracking) {
     ob_trajectory_sample(&s->trajectory, 0.0f, &s->ref);
 }
 
+static void plan(ob_servo_t *s, bool was_tracking) {
+    float x0;
+    float v0;
+    start_state(s, was_tracking, &x0, &v0);
+    plan_from(s, x0, v0);
+}
+
 /* Plan now if the state is known, else as soon as the first reading arrives. */
 static void plan_or_defer(ob_servo_t *s, bool was_tracking) {
     if (s->have_angle) {
@@ -202,8 +206,9 @@ static void plan_or_defer(ob_servo_t *s, bool was_tracking) {
  * caller stalled): the shaft may have been turned meanwhile and the
  * trajectory's start lies in the past, so following it would lunge at full
  * duty toward a target computed from a stale angle. Plan the command again
- * from this reading, starting now, with the observer re-seeded at rest (its
- * prediction across the gap is meaningless).
+ * from this reading, starting now, at the speed it was planned to start at
+ * (what the servo itself last did: at rest after a hand-over, at speed after
+ * a stall of its caller).
  */
 static void confirm_plan(ob_servo_t *s, uint32_t now_ms) {
     if (!s->plan_unconfirmed) {
@@ -211,8 +216,10 @@ static void confirm_plan(ob_servo_t *s, uint32_t now_ms) {
     }
     s->plan_unconfirmed = false;
     if (closed_loop(s) && now_ms - s->start_ms > s->cfg.silent_timeout_ms) {
-        ob_observer_reset(&s->observer, s->angle_deg);
-        plan(s, false);
+        /* The observer's speed over the gap is an average that may include someone else's move. */
+        float v0 = s->trajectory.v_dps[0];
+        s->observer.v_dps = v0;
+        plan_from(s, s->angle_deg, v0);
     }
 }
 

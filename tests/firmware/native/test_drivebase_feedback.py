@@ -58,6 +58,23 @@ def test_a_stalled_caller_resumes_at_cruise_without_a_jolt(stall_ms):
     assert rig.chassis.x_mm == pytest.approx(600.0, abs=1.0)
 
 
+def test_a_drive_repeated_after_a_stalled_caller_keeps_the_robot_running_smoothly():
+    # A line follower re-issuing drive() every few ms, and a 40 ms GC pause just before one call:
+    # the robot kept going meanwhile, and the new command must carry on from its speed.
+    db, rig = new_rig()
+    db.drive(200, 0)
+    rig.run(600)
+    cruise = rig.trace[-1].duties
+    for _ in range(40):
+        rig.chassis.step(cruise, 0.001)
+        rig.now_ms += 1
+    db.drive(200, 0)
+    resumed_at = len(rig.trace)
+    rig.run(100)
+    worst = max(abs(d - c) for s in rig.trace[resumed_at:] for d, c in zip(s.duties, cruise, strict=True))
+    assert worst < 5.0, f"duty jumped by {worst:.0f} % when drive() came after the pause"
+
+
 def test_a_new_move_after_the_wheel_returns_clears_the_fault_and_drives_normally():
     db, rig = new_rig()
     db.straight(500)

@@ -345,6 +345,22 @@ class TestResumeAfterGap:
             errors.append(abs(rig.servo.speed() - rig.plant.speed_dps))
         assert max(errors) < 100.0, f"speed estimate off by up to {max(errors):.0f} deg/s"
 
+    def test_a_command_repeated_after_a_stalled_caller_keeps_the_motor_running_smoothly(self):
+        # A loop re-issuing run_speed() on the hub, and a 40 ms GC pause just before one call: the
+        # motor kept its duty meanwhile and is still at speed, which the new plan must start from.
+        rig = Rig()
+        rig.servo.run_speed(500)
+        rig.run(800)
+        cruise = rig.servo.duty
+        for _ in range(40):
+            rig.plant.step(cruise, 0.001)
+            rig.now_ms += 1
+        rig.servo.run_speed(500)
+        rig.run(100)
+        duties = rig.window(100)[:, 3]
+        assert np.abs(duties - cruise).max() < 10.0, f"duty jumped by {np.abs(duties - cruise).max():.0f} %"
+        assert rig.window(50)[:, 2].mean() == pytest.approx(500.0, rel=0.02)
+
     def test_a_late_tick_keeps_the_profile_schedule(self):
         # Shorter than silent_timeout_ms: a late tick, not a gap; the move keeps its clock.
         rig = Rig()
