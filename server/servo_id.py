@@ -78,9 +78,14 @@ class UsbServoBus:
         deadline = time.monotonic() + self.timeout_s
         while time.monotonic() < deadline:
             buffer += self.serial.read(64)
-            if not echo_skipped and len(buffer) >= len(packet) and buffer.startswith(packet):
-                buffer = buffer[len(packet) :]
-                echo_skipped = True
+            if not echo_skipped:
+                # An echoing adapter hands our own request back first, maybe behind a late reply to the
+                # previous request. A ping's echo reads exactly like a status frame from the pinged id,
+                # so everything up to and including the echo is dropped before any reply is believed.
+                echo_at = buffer.find(packet)
+                if echo_at >= 0:
+                    buffer = buffer[echo_at + len(packet) :]
+                    echo_skipped = True
             while buffer:
                 status = self.scs.decode_status(buffer)
                 if status.result == "ok" and status.id == servo_id:
@@ -102,7 +107,8 @@ class UsbServoBus:
         return self._transfer(self.scs.write(servo_id, register, data), replier) is not None
 
     def scan(self) -> list[int]:
-        return [servo_id for servo_id in range(FIRST_ID, LAST_ID + 1) if self.ping(servo_id)]
+        # A second ping confirms each answer, so a stray late frame cannot list a servo that is not there.
+        return [i for i in range(FIRST_ID, LAST_ID + 1) if self.ping(i) and self.ping(i)]
 
     def where(self) -> str:
         return f"the bus on {self.port}"

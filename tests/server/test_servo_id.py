@@ -66,3 +66,37 @@ def test_an_empty_bus_and_bad_ids_are_user_errors(rig):
 def test_a_port_that_does_not_exist_is_reported():
     done = servo_id("/dev/nonexistent-adapter", "--scan")
     assert done.returncode == 1 and "cannot open /dev/nonexistent-adapter" in done.stderr
+
+
+class _LateFrameThenEcho:
+    """An echoing adapter under load: a late reply to the previous request arrives first, then the
+    echo of this one, and no servo answers."""
+
+    def __init__(self, late_frame):
+        self.late_frame = late_frame
+        self.pending = b""
+
+    def reset_input_buffer(self):
+        pass  # the late frame lands just after the flush, as it does on a busy host
+
+    def write(self, data):
+        self.pending = self.late_frame + bytes(data)
+
+    def flush(self):
+        pass
+
+    def read(self, n):
+        out, self.pending = self.pending[:n], self.pending[n:]
+        return out
+
+
+def test_an_echo_behind_a_late_frame_is_not_taken_for_a_servo_reply(monkeypatch):
+    # Regression: the echo was skipped only at the start of the buffer, so an echoed ping behind a
+    # late frame read as a reply from the pinged id and the scan listed phantom servos.
+    from openbricks_native import scs
+    from openbricks_server.servo_id import UsbServoBus
+
+    bus = UsbServoBus.__new__(UsbServoBus)
+    bus.scs, bus.port, bus.timeout_s = scs, "/dev/fake", 0.02
+    bus.serial = _LateFrameThenEcho(late_frame=scs.status(1, 0, b""))
+    assert not bus.ping(241)
