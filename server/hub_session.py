@@ -32,13 +32,13 @@ from openbricks_server.link import (
     LinkError,
     LinkTimeout,
 )
-from openbricks_server.link.host_call import HubInfo
+from openbricks_server.link.host_call import HubInfo, call_source
 from openbricks_server.link.raw_repl import RawRepl
 
 T = TypeVar("T")
 CONNECT_TIMEOUT_S = 20.0
 ENTER_TIMEOUT_S = 10.0
-HAND_BACK_LINE = b"import openbricks.host_calls as h;h.idle()\r"
+HAND_BACK_LINE = call_source("idle", {}).encode() + b"\r"
 BOOT_WAIT_S = 20.0
 
 

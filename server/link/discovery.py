@@ -1,10 +1,15 @@
 """Finding the virtual hubs running on this computer, by name.
 
-A virtual hub (`python -m openbricks_sim.virtual_hub --pty`) lives in `<data dir>/virtual-hubs/<name>/`
-and, while it runs, holds an exclusive lock on `hub.lock` there and answers `{"op": "status"}` on
-`control.sock` with its name and the pty its REPL is served on. A folder whose lock is free belongs to
-a hub that has stopped (or crashed: the kernel drops a dead process's lock), so it is ignored, and a
-hub serving its REPL over stdio (no pty) is not reachable by others and is ignored too.
+A virtual hub (`python -m openbricks_sim.virtual_hub --pty`) lives in `<data dir>/virtual-hubs/<name>/`.
+While it runs it holds an exclusive lock on `hub.lock` there (with its pid in the file), and once up
+it writes `endpoint.json`: its pid, the pty its REPL is served on and the path of its control socket,
+which answers `{"op": "status"}`. The socket is `control.sock` in the folder unless that path is too
+long for a Unix socket (a deep data dir), when it lives in a temp folder: the record says where.
+
+A folder whose lock is free belongs to a hub that has stopped (or crashed: the kernel drops a dead
+process's lock), so it is ignored; so is a record whose pid is not the lock holder's (left by a killed
+hub while a new one is still starting), and a hub serving its REPL over stdio (no pty), which others
+cannot reach. A hub that predates the record is still found through `control.sock` in its folder.
 """
 
 from __future__ import annotations
@@ -19,6 +24,7 @@ from openbricks_server.paths import virtual_hubs_dir
 
 LOCK_FILE = "hub.lock"  # openbricks_sim.virtual_hub.hub.LOCK_FILE
 CONTROL_SOCKET = "control.sock"  # openbricks_sim.virtual_hub.control.SOCKET_NAME
+ENDPOINT_FILE = "endpoint.json"  # openbricks_sim.virtual_hub.endpoint.FILE_NAME
 STATUS_TIMEOUT_S = 5.0  # a hub still booting answers late; a dead one does not hold its lock
 
 
@@ -60,6 +66,28 @@ def control(socket_path: Path, request: dict, timeout_s: float = STATUS_TIMEOUT_
     return json.loads(reply)
 
 
+def _lock_pid(lock_path: Path) -> int | None:
+    try:
+        return int(lock_path.read_text().split()[0])
+    except (OSError, ValueError, IndexError):
+        return None
+
+
+def _control_socket(folder: Path) -> Path | None:
+    """Where the hub in `folder` serves its control socket, or None while it cannot be trusted."""
+    try:
+        record = json.loads((folder / ENDPOINT_FILE).read_text())
+    except FileNotFoundError:
+        return folder / CONTROL_SOCKET  # a hub from before endpoint records
+    except (OSError, ValueError):
+        return None  # being replaced right now: the next look finds it whole
+    if not isinstance(record, dict) or not record.get("control"):
+        return None
+    if record.get("pid") != _lock_pid(folder / LOCK_FILE):
+        return None  # left by a hub that was killed; its successor has not written its own yet
+    return Path(record["control"])
+
+
 def virtual_hubs() -> list[VirtualHub]:
     """The live, reachable virtual hubs, by name."""
     root = virtual_hubs_dir()
@@ -69,8 +97,11 @@ def virtual_hubs() -> list[VirtualHub]:
     for folder in sorted(root.iterdir()):
         if not folder.is_dir() or not _held(folder / LOCK_FILE):
             continue
+        socket_path = _control_socket(folder)
+        if socket_path is None:
+            continue
         try:
-            status = control(folder / CONTROL_SOCKET, {"op": "status"})
+            status = control(socket_path, {"op": "status"})
         except (OSError, ValueError):
             continue  # starting up or shutting down: not reachable right now
         if status.get("ok") and status.get("pty"):
@@ -80,7 +111,7 @@ def virtual_hubs() -> list[VirtualHub]:
                     folder,
                     str(status["pty"]),
                     bool(status.get("running")),
-                    folder / CONTROL_SOCKET,
+                    socket_path,
                 )
             )
     return found

@@ -3,7 +3,8 @@
 Runs one virtual hub in this process until it is stopped (SIGTERM, SIGINT, or the end of stdin in
 stdio mode). With --pty the first line on stdout is the path of the pseudo-terminal to connect to
 (`mpremote connect <path>`), the second `control <path>` names the control socket; without it the
-hub talks over stdin/stdout.
+hub talks over stdin/stdout. Once up, the hub also records both in `endpoint.json` in its directory,
+which is how `openbricks` finds it (endpoint.py).
 
 The process is the hub's sandbox: user code runs here, under an address-space limit (--memory-mb)
 and per-run time limits, never in the process that started it.
@@ -18,6 +19,7 @@ import sys
 import threading
 
 from ..limits import DEFAULT_MEMORY_MB, limit_memory
+from . import endpoint
 from .control import SOCKET_NAME, ControlServer
 from .hub import HubBusyError, HubConfig, VirtualHub
 from .hub_fs import DEFAULT_CAPACITY_BYTES
@@ -128,6 +130,8 @@ def main(argv=None):
     limit_memory(args.memory_mb)
 
     def ready():
+        pty = port.path if args.pty else None
+        endpoint.write(directory, name=args.name, pid=os.getpid(), pty=pty, control=control.path)
         if args.pty:
             announce.write(f"{port.path}\ncontrol {control.path}\n")
             announce.flush()
@@ -142,6 +146,7 @@ def main(argv=None):
     try:
         hub.serve(on_ready=ready)
     finally:
+        endpoint.remove(directory)
         control.close()
     return 0
 

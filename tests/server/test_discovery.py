@@ -2,8 +2,11 @@
 
 import fcntl
 import json
+import os
 import socket
+import tempfile
 import threading
+from pathlib import Path
 
 import pytest
 
@@ -17,14 +20,17 @@ def data_dir(tmp_path, monkeypatch):
     return tmp_path
 
 
-def fake_hub(folder, name, pty, hold_lock=True):
-    """A folder laid out as a running virtual hub: a held lock and a control socket answering status."""
+def fake_hub(folder, name, pty, hold_lock=True, socket_path=None):
+    """A folder laid out as a running virtual hub: a held lock (with this pid in it) and a control
+    socket answering status, at `socket_path` when given (as for a deep folder), else in the folder."""
     folder.mkdir(parents=True)
     lock = open(folder / discovery.LOCK_FILE, "a+")  # noqa: SIM115 - held while the fake hub "runs"
     if hold_lock:
         fcntl.flock(lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    lock.write(f"{os.getpid()}\n")
+    lock.flush()
     server = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
-    server.bind(str(folder / discovery.CONTROL_SOCKET))
+    server.bind(str(socket_path or folder / discovery.CONTROL_SOCKET))
     server.listen()
 
     def serve():
@@ -59,6 +65,44 @@ def test_live_hubs_are_found_and_stale_folders_ignored(data_dir):
             server.close()
 
 
+def endpoint_record(folder, socket_path, pid):
+    record = {"format": 1, "name": folder.name, "pid": pid, "pty": "/dev/pts/9", "control": str(socket_path)}
+    (folder / discovery.ENDPOINT_FILE).write_text(json.dumps(record))
+
+
+def test_a_hub_in_a_data_dir_too_deep_for_a_socket_is_found_through_its_endpoint_record(
+    data_dir, monkeypatch
+):
+    deep = data_dir / ("d" * 60) / ("e" * 60)
+    monkeypatch.setenv("OPENBRICKS_DATA_DIR", str(deep))
+    folder = virtual_hubs_dir() / "DeepBot"
+    assert len(str(folder / discovery.CONTROL_SOCKET)) > 108  # no Unix socket can live there
+    elsewhere = Path(tempfile.mkdtemp(prefix="ob-test-vhub-")) / "control.sock"
+    lock, server = fake_hub(folder, "DeepBot", "/dev/pts/9", socket_path=elsewhere)
+    try:
+        endpoint_record(folder, elsewhere, os.getpid())
+        found = discovery.find_virtual_hub("DeepBot")
+        assert found is not None and found.pty == "/dev/pts/9" and found.control_socket == elsewhere
+    finally:
+        lock.close()
+        server.close()
+        elsewhere.unlink()
+        elsewhere.parent.rmdir()
+
+
+def test_a_record_left_by_a_killed_hub_is_not_followed(data_dir):
+    folder = virtual_hubs_dir() / "RobotB"
+    lock, server = fake_hub(folder, "RobotB", "/dev/pts/5")
+    try:
+        endpoint_record(folder, folder / discovery.CONTROL_SOCKET, os.getpid() + 1)  # not the lock holder
+        assert discovery.find_virtual_hub("RobotB") is None
+        endpoint_record(folder, folder / discovery.CONTROL_SOCKET, os.getpid())
+        assert discovery.find_virtual_hub("RobotB").pty == "/dev/pts/5"
+    finally:
+        lock.close()
+        server.close()
+
+
 def test_the_registry_is_where_the_simulator_puts_its_hubs(data_dir):
     from openbricks_sim.virtual_hub.__main__ import hubs_dir
 
@@ -66,6 +110,10 @@ def test_the_registry_is_where_the_simulator_puts_its_hubs(data_dir):
 
 
 def test_the_file_names_match_the_simulators():
-    from openbricks_sim.virtual_hub import control, hub
+    from openbricks_sim.virtual_hub import control, endpoint, hub
 
-    assert (discovery.LOCK_FILE, discovery.CONTROL_SOCKET) == (hub.LOCK_FILE, control.SOCKET_NAME)
+    assert (discovery.LOCK_FILE, discovery.CONTROL_SOCKET, discovery.ENDPOINT_FILE) == (
+        hub.LOCK_FILE,
+        control.SOCKET_NAME,
+        endpoint.FILE_NAME,
+    )
