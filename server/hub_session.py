@@ -122,7 +122,23 @@ def translate(name: str, exc: LinkError, dropped: bool = False) -> CliError:
         return CliError(f"{name} stopped answering: {exc}; check that it is powered and in range, then retry")
     if isinstance(exc, HubCallError):
         return CliError(f"{name}: {exc.error}")
+    if isinstance(exc, HubException):
+        return CliError(hub_exception_message(name, exc))
     return CliError(f"{name}: {exc}")
+
+
+def hub_exception_message(name: str, exc: HubException) -> str:
+    """One line for code the CLI sent that raised on the hub (host calls do not raise by design), with
+    the likely cause; the hub's traceback is for --debug, not for the person at the table."""
+    kind = exc.summary.split(":", 1)[0]
+    if kind in ("ImportError", "AttributeError"):
+        return (
+            f"{name} raised {exc.summary}: its firmware lacks host calls this openbricks uses; "
+            f"update it with `openbricks flash`"
+        )
+    if kind == "MemoryError":
+        return f"{name} ran out of memory ({exc.summary}); press its RESET button to free it, then retry"
+    return f"{name} raised {exc.summary}"
 
 
 async def _hand_back(session: HubSession) -> None:
@@ -217,12 +233,8 @@ async def set_up_flashed_hub(port: str, name: str, provenance: str, qtr_calibrat
             return {"hub_name": named["hub_name"], "firmware": recorded["firmware"]}
         except HubCallError as exc:
             raise CliError(f"the flashed hub on {port} refused {exc.call}: {exc.error}") from None
-        except HubException as exc:  # a host call it lacks: not a hub that is still booting
-            last = exc.traceback.strip().splitlines()[-1] if exc.traceback.strip() else "an error"
-            raise CliError(
-                f"the flashed hub on {port} raised {last} while being set up; its firmware may be older "
-                "than this openbricks: flash a current release"
-            ) from None
+        except HubException as exc:  # e.g. a host call it lacks: not a hub that is still booting
+            raise CliError(f"the flashed hub on {port}: {hub_exception_message(name, exc)}") from None
         except (LinkError, OSError) as exc:  # not up yet: still booting
             last_error = exc
             await asyncio.sleep(0.5)

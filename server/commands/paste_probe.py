@@ -13,7 +13,7 @@ import asyncio
 import time
 
 from openbricks_server.errors import EXIT_FAILED, EXIT_OK, CliError
-from openbricks_server.hub_session import with_hub
+from openbricks_server.hub_session import hub_exception_message, with_hub
 from openbricks_server.link import HubException, LinkTimeout
 from openbricks_server.link.host_call import call_source
 
@@ -54,12 +54,9 @@ async def _probe(session, max_bytes: int, timeout_s: float):
             else:
                 verdict = "truncated (ran without echoing the token)"
         except HubException as exc:
-            last = exc.traceback.strip().splitlines()[-1] if exc.traceback.strip() else "an error"
-            if "AttributeError" in last and "paste_probe" in last:
-                raise CliError(
-                    f"{session.name}'s firmware has no paste_probe host call: flash a current release"
-                ) from None
-            ok, verdict = False, f"truncated ({last})"
+            if exc.summary.startswith("AttributeError") and "paste_probe" in exc.summary:
+                raise CliError(hub_exception_message(session.name, exc)) from None
+            ok, verdict = False, f"truncated ({exc.summary})"
         except LinkTimeout:
             ok, verdict = False, f"hung (no answer within {timeout_s:g} s)"
         elapsed = time.perf_counter() - started

@@ -58,10 +58,12 @@ class HubException(LinkError):
     """Code run on the hub raised; the message carries the hub's traceback."""
 
     def __init__(self, hub: str, traceback: str, stdout: bytes = b"", results: list | None = None):
-        last = traceback.strip().splitlines()[-1] if traceback.strip() else "unknown error"
+        last = traceback.strip().splitlines()[-1].strip() if traceback.strip() else "unknown error"
         super().__init__(f"{hub} raised {last}\n{traceback.rstrip()}")
         self.hub = hub
         self.traceback = traceback
+        #: The exception line alone ("MemoryError: memory allocation failed, ..."), for one-line reports.
+        self.summary = last
         self.stdout = stdout
         #: Host-call result lines the code printed before it raised.
         self.results = results or []
