@@ -114,6 +114,23 @@ class UsbServoBus:
         return f"the bus on {self.port}"
 
 
+def choose_old_id(ids: list[int], old_id: int | None, where: str) -> int:
+    """The servo to re-ID by the --old-id rule: the lone servo on the bus, or the one named; never guessed."""
+    listed = ", ".join(str(i) for i in ids)
+    if not ids:
+        raise ServoIdError(f"no servo answers on {where}: check its power and the data wiring, then --scan")
+    if old_id is None:
+        if len(ids) > 1:
+            raise ServoIdError(
+                f"{len(ids)} servos answer (ids {listed}): pass --old-id to say which one to re-ID; it is "
+                "never guessed"
+            )
+        return ids[0]
+    if old_id not in ids:
+        raise ServoIdError(f"no servo answers at --old-id {old_id}; the bus has ids {listed}")
+    return old_id
+
+
 def reid(bus: UsbServoBus, new_id: int, old_id: int | None) -> Reid:
     """Give one servo `new_id`, verified by read-back; see the module rules."""
     check_id("new id", new_id)
@@ -121,19 +138,7 @@ def reid(bus: UsbServoBus, new_id: int, old_id: int | None) -> Reid:
     scs = bus.scs
     ids = bus.scan()
     listed = ", ".join(str(i) for i in ids)
-    if not ids:
-        raise ServoIdError(
-            f"no servo answers on {bus.where()}: check its power and the data wiring, then --scan"
-        )
-    if old_id is None:
-        if len(ids) > 1:
-            raise ServoIdError(
-                f"{len(ids)} servos answer (ids {listed}): pass --old-id to say which one to re-ID; it is "
-                "never guessed"
-            )
-        old_id = ids[0]
-    elif old_id not in ids:
-        raise ServoIdError(f"no servo answers at --old-id {old_id}; the bus has ids {listed}")
+    old_id = choose_old_id(ids, old_id, bus.where())
     if new_id == old_id:
         return Reid(old_id, new_id, ids, False)
     if new_id in ids:

@@ -5,7 +5,7 @@ from __future__ import annotations
 import sys
 
 from openbricks_server.errors import EXIT_OK
-from openbricks_server.servo_id import check_id
+from openbricks_server.servo_id import check_id, choose_old_id
 
 
 def main(args) -> int:
@@ -58,9 +58,12 @@ def _through_hub(args) -> int:
             result = await session.call("servo_scan", timeout_s=60, **bus)
             _report_scan(result["ids"], f"{args.name}'s servo bus")
             return EXIT_OK
-        result = await session.call(
-            "servo_set_id", timeout_s=60, new_id=args.new_id, old_id=args.old_id, **bus
-        )
+        old_id = args.old_id
+        if old_id is None:
+            # The --old-id rule in the CLI's own words; the hub then re-IDs exactly the servo named.
+            scan = await session.call("servo_scan", timeout_s=60, **bus)
+            old_id = choose_old_id(scan["ids"], None, f"{args.name}'s servo bus")
+        result = await session.call("servo_set_id", timeout_s=60, new_id=args.new_id, old_id=old_id, **bus)
         _report_reid(result["old_id"], result["new_id"], result["ids"], result["changed"])
         return EXIT_OK
 

@@ -12,7 +12,7 @@ def test_scan_and_re_id_through_the_hub(env):
     assert scan.returncode == 0, scan.stderr
     assert scan.stdout.strip() == "servo ids on RobotA's servo bus: 1, 2"
     guess = cli(env, "servo-id", "-n", "RobotA", "7")
-    assert guess.returncode == 1 and "pass old_id= to say which one" in guess.stderr
+    assert guess.returncode == 1 and "pass --old-id to say which one" in guess.stderr
     taken = cli(env, "servo-id", "-n", "RobotA", "1", "--old-id", "2")
     assert taken.returncode == 1 and "id 1 is already taken" in taken.stderr
     done = cli(env, "servo-id", "-n", "RobotA", "7", "--old-id", "2")
