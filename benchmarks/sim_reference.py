@@ -48,46 +48,21 @@ RUN_TIMEOUT_S = 600
 OUR_TABLE = "wro"
 REFERENCE_TABLE = "wro-2026-senior"
 
-# The manual's section 5.1 example as printed there, with NUM_LAPS raised to make a mission.
+# The workload of the manual's section 5.1 square (same wiring, geometry, speeds and 200 mm sides),
+# with the lap count raised to make a mission; written here for the benchmark.
 MISSION = """\
 from openbricks.drivers.st3032 import ST3032Motor
 from openbricks.robotics import DriveBase
 
-LEFT_ID, RIGHT_ID = 2, 1
-UART_ID, TX, RX   = 1, 14, 41
-
-WHEEL_DIAMETER_MM = 88
-AXLE_TRACK_MM      = 136
-
-SIDE_MM            = 200
-NUM_LAPS           = {laps}
-
-STRAIGHT_SPEED_MM  = 150
-TURN_RATE_DPS      = 200
-
-def main():
-    print("--- ST-3032 drivebase square (%d mm sides x %d laps) ---" %
-          (SIDE_MM, NUM_LAPS))
-
-    left = ST3032Motor(servo_id=LEFT_ID,  uart_id=UART_ID, tx=TX, rx=RX,
-                       invert=True)
-    right = ST3032Motor(servo_id=RIGHT_ID, uart_id=UART_ID, tx=TX, rx=RX)
-
-    db = DriveBase(left, right,
-                    wheel_diameter_mm=WHEEL_DIAMETER_MM,
-                    axle_track_mm=AXLE_TRACK_MM)
-    db.settings(straight_speed=STRAIGHT_SPEED_MM, turn_rate=TURN_RATE_DPS)
-
-    for lap in range(NUM_LAPS):
-        for side in range(4):
-            print("  lap %d side %d: straight(%d) -> turn(+90)" %
-                  (lap + 1, side + 1, SIDE_MM))
-            db.straight(SIDE_MM)
-            db.turn(90)
-
-        print("--- done ---")
-
-main()
+left = ST3032Motor(servo_id=2, uart_id=1, tx=14, rx=41, invert=True)
+right = ST3032Motor(servo_id=1, uart_id=1, tx=14, rx=41)
+base = DriveBase(left, right, wheel_diameter_mm=88, axle_track_mm=136)
+base.settings(straight_speed=150, turn_rate=200)
+for lap in range({laps}):
+    for side in range(4):
+        base.straight(200)
+        base.turn(90)
+    print("lap", lap + 1, "done")
 """
 
 
