@@ -149,7 +149,7 @@ print(min(per_tick), statistics.median(per_tick))
 
 
 def reference_period(ours_ns: float) -> list[Row]:
-    from benchmarks import reference
+    from benchmarks import _reference as reference
 
     out = reference.run_python(REFERENCE_PERIOD.format(ticks=BINDING_TICKS, rounds=BINDING_ROUNDS))
     best, median = (float(v) for v in out.split())

@@ -3,7 +3,7 @@
 The program is the manual's square example (section 5.1) with more laps, a 60 s-class mission,
 run unchanged by both simulators on their `empty` worlds, headless, each in a process of its own
 started the way a user would start it (`python -m <their sim module> run ...`). The reference lives
-in the benchmarks' throwaway virtualenv (benchmarks.reference: `openbricks[sim]==4.36.0`, created once
+in the benchmarks' throwaway virtualenv (benchmarks._reference: `openbricks[sim]==4.36.0`, created once
 under the user cache dir) and is only ever run as a subprocess: nothing of it is imported here.
 
 For each side, best of ROUNDS alternating runs (other processes share the CPU; alternating slows
@@ -37,7 +37,7 @@ from pathlib import Path
 
 from benchmarks import Row
 
-REFERENCE_VERSION = "4.36.0"  # what benchmarks.reference installs
+REFERENCE_VERSION = "4.36.0"  # what benchmarks._reference installs
 LAPS = 6  # about 66 s of simulated time
 TABLE_LAPS = 2  # the reference steps its tables several times slower: keep that run short
 ROUNDS = 5
@@ -63,6 +63,7 @@ for lap in range({laps}):
         base.straight(200)
         base.turn(90)
     print("lap", lap + 1, "done")
+print("mission done")
 """
 
 
@@ -166,7 +167,7 @@ def run_ours(program: Path, world: str) -> Measured:
 
 
 def run_reference(program: Path, world: str) -> Measured:
-    from benchmarks import reference
+    from benchmarks import _reference as reference
 
     trace = program.parent / "trace.csv"
     command = [
@@ -183,7 +184,7 @@ def run_reference(program: Path, world: str) -> Measured:
         str(SIM_LIMIT_S),
     ]
     done, wall_s, cpu_s, peak_mb = _measure(command, program.parent, _clean_env())
-    if done.returncode != 0 or "--- done ---" not in done.stdout:
+    if done.returncode != 0 or "mission done" not in done.stdout:
         raise RuntimeError(
             f"the reference simulator failed on {world} (exit {done.returncode}):\n"
             f"{_tail(done.stdout + done.stderr)}"
@@ -213,7 +214,16 @@ def _program(folder: Path, laps: int) -> Path:
     return path
 
 
+def _precompile_ours() -> None:
+    """Byte-compile our packages, as pip does for the reference when it installs it: the processes run
+    with PYTHONDONTWRITEBYTECODE, and a source checkout would otherwise recompile every module."""
+    root = Path(__file__).resolve().parent.parent
+    folders = [str(root / name) for name in ("openbricks", "sim", "server")]
+    subprocess.run([sys.executable, "-m", "compileall", "-q", *folders], check=True, timeout=300)
+
+
 def side_by_side() -> list[Row]:
+    _precompile_ours()
     ours, reference = [], []
     with tempfile.TemporaryDirectory(prefix="ob-bench-ref-") as tmp:
         folders = {name: Path(tmp) / name for name in ("ours", "reference")}

@@ -1,8 +1,8 @@
 """The reference implementation, openbricks 4.36.0 from PyPI, for side-by-side figures.
 
 It is installed once, with its simulator extra, into a throwaway venv under the user cache dir and
-only ever run as a subprocess of that venv's interpreter: the project never imports it. The module
-name starts without an underscore but defines no run(), so the benchmark runner passes it over.
+only ever run as a subprocess of that venv's interpreter: the project never imports it. (The leading
+underscore keeps the benchmark runner from taking this helper for a benchmark.)
 """
 
 from __future__ import annotations
