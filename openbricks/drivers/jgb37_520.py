@@ -8,9 +8,15 @@ with this motor's few thousand edges a second.
 
 The closed loop runs on the native servo core (`_openbricks_native.Servo`),
 ticked by `motor_process` at 1 kHz: this class only builds the bridge and the
-encoder and hands the core three callables (read the angle, write a duty,
-release the bridge). Open-loop commands (dc, brake, coast) and the encoder
-angle work on a build without the native core; closed-loop ones need it.
+encoder and hands the core its motor IO (read the angle, write a duty, release
+the bridge). Open-loop commands (dc, brake, coast) and the encoder angle work
+on a build without the native core; closed-loop ones need it.
+
+A wheel has one driver at a time. A DriveBase drives the same motor IO with
+its own controller after `give_to_drivebase()` stood this motor's core down;
+any direct command here (run_speed, run_angle, dc, brake, coast, hold, ...)
+first takes the wheel back, which ends the drive base's move and releases its
+other wheel too, as Pybricks does when a drive base motor is used directly.
 """
 
 import time
@@ -63,7 +69,6 @@ class JGB37Motor(Motor):
         self.counts_per_output_rev = counts_per_output_rev
         self.no_load_dps = no_load_dps
         self.pcnt_unit = pcnt_unit
-        self._deg_per_count = 360.0 / counts_per_output_rev
         self._offset_deg = 0.0
         self._bridge = L298NMotor(in1, in2, pwm, invert=invert)
         try:
@@ -71,6 +76,8 @@ class JGB37Motor(Motor):
         except Exception:
             self._bridge.close()
             raise
+        self._io = BridgeIO(self._encoder, self._bridge, 360.0 / counts_per_output_rev)
+        self._driver = None  # the drive base wheel pair driving this bridge, while one does
         self._servo = self._make_servo(kp)
         estop.on_engage(self.coast)  # through the core, or its next tick would drive the bridge again
 
@@ -84,10 +91,11 @@ class JGB37Motor(Motor):
             import _openbricks_native
         except ImportError:
             return None  # open-loop only on this build; closed-loop calls say so
+        io = self._io
         servo = _openbricks_native.Servo(
-            read_angle=self._sensor_deg,
-            write_duty=self._write_duty,
-            write_coast=self._bridge.coast,
+            read_angle=io.read_angle,
+            write_duty=io.write_duty,
+            write_coast=io.coast,
             counts_per_rev=self.counts_per_output_rev,
             max_speed_dps=self.no_load_dps,
             ff_speed=100.0 / self.no_load_dps,
@@ -95,26 +103,54 @@ class JGB37Motor(Motor):
         )
         return servo
 
-    # --- the native core's IO ------------------------------------------------------
+    # --- who drives the wheel -------------------------------------------------------
 
-    def _sensor_deg(self):
-        return self._encoder.count() * self._deg_per_count
+    @property
+    def closed_loop(self):
+        """True when this build has the native servo core, so the motor (or a drive base) can close
+        the loop over its encoder."""
+        return self._servo is not None
 
-    def _write_duty(self, duty_pct):
-        # The core works in the user frame (the bridge applies `invert`); its duty 0 means "brake":
-        # the bridge shorts the winding rather than letting go.
-        if duty_pct == 0:
-            self._bridge.brake()
-        else:
-            self._bridge._drive(duty_pct)
+    def motor_io(self):
+        """The IO a controller drives this wheel through: `read_angle()`, `write_duty(pct)`, `coast()`.
 
-    def _native(self, method):
+        The same contract as a serial-bus engine slot's motor IO, so a drive base's controller
+        connects to either the same way."""
+        return self._io
+
+    def give_to_drivebase(self, driver):
+        """`driver` (a drive base's wheel pair) drives this bridge from now on; this motor's own core
+        stands down. The next direct command calls `driver.let_go()` before it drives the wheel."""
+        if self._servo is not None:
+            import _openbricks_native
+
+            _openbricks_native.motor_process.unsubscribe(self._servo)
+        self._driver = driver
+
+    def forget_drivebase(self, driver):
+        """`driver` no longer drives this bridge (it let go, or its drive base was closed)."""
+        if self._driver is driver:
+            self._driver = None
+
+    def _take_back(self):
+        driver = self._driver
+        if driver is not None:
+            self._driver = None
+            driver.let_go()
+
+    def _native(self, method, drive=True):
+        """The core, ticking. `drive` (a command) takes the wheel back from a drive base first; a query
+        leaves a drive base driving and reads the core's observer as it was last ticked."""
         servo = self._servo
         if servo is None:
             raise NotImplementedError(
                 "%s.%s() needs the native servo core (_openbricks_native), which this firmware build lacks; "
                 "dc(), brake(), coast() and angle() work without it" % (type(self).__name__, method)
             )
+        if drive:
+            self._take_back()
+        elif self._driver is not None:
+            return servo  # ticking it now would make it a second driver of the bridge
         import _openbricks_native
 
         # Idempotent; re-arms the tick after the launcher wiped the previous program's subscribers.
@@ -127,45 +163,48 @@ class JGB37Motor(Motor):
         """Fixed duty -100..100, open loop (Pybricks Motor.dc). Non-blocking."""
         estop.check("%s dc()" % type(self).__name__)
         duty = max(-100, min(100, duty))
+        self._take_back()
         if self._servo is not None:
             self._servo.dc(duty)  # the core must know, or its next tick would overwrite the duty
         else:
             self._bridge.dc(duty)
 
     def brake(self):
-        """Short the winding (active braking)."""
+        """Short the winding (active braking). A stop: allowed while the e-stop is engaged."""
+        self._take_back()
         if self._servo is not None:
             self._servo.brake()
         else:
             self._bridge.brake()
 
     def coast(self):
-        """Release the bridge; the motor free-wheels."""
+        """Release the bridge; the motor free-wheels. Always allowed, e-stop or not."""
+        self._take_back()
         if self._servo is not None:
             self._servo.coast()
         else:
             self._bridge.coast()
 
     def hold(self):
-        """Hold the current angle on the position loop."""
+        """Hold the current angle on the position loop. A stop: allowed while the e-stop is engaged."""
         self._native("hold").hold()
 
     def angle(self):
         """Output-shaft angle in degrees, straight from the encoder count."""
-        return self._sensor_deg() + self._offset_deg
+        return self._io.read_angle() + self._offset_deg
 
     def reset_angle(self, angle=0):
-        self._offset_deg = angle - self._sensor_deg()
+        self._offset_deg = angle - self._io.read_angle()
         if self._servo is not None:
             self._servo.reset_angle(angle)
 
     def speed(self):
         """Measured shaft speed in deg/s (the core's encoder observer)."""
-        return self._native("speed").speed()
+        return self._native("speed", drive=False).speed()
 
     def stalled(self):
         """True once the core has pushed at its duty limit (or far behind) while nearly still for 200 ms."""
-        return self._native("stalled").stalled()
+        return self._native("stalled", drive=False).stalled()
 
     def run_speed(self, deg_per_s):
         """Hold `deg_per_s`, ramped at the core's acceleration (closed loop)."""
@@ -213,7 +252,8 @@ class JGB37Motor(Motor):
         self._servo.set_duty_limit(self._limit_stack.pop())
 
     def close(self):
-        """Stop ticking, release the bridge and the encoder pins."""
+        """Stop ticking, release the bridge and the encoder pins (a drive base driving it lets go)."""
+        self._take_back()
         estop.remove(self.coast)
         if self._servo is not None:
             import _openbricks_native
@@ -221,3 +261,30 @@ class JGB37Motor(Motor):
             _openbricks_native.motor_process.unsubscribe(self._servo)
         self._bridge.close()
         self._encoder.close()
+
+
+class BridgeIO:
+    """An encoder motor's IO as a controller sees it: the output angle in, a bridge duty or a release out.
+
+    The motor's own servo core and a drive base's controller drive the wheel through this one object,
+    so a duty means the same thing whichever of them writes it.
+    """
+
+    def __init__(self, encoder, bridge, deg_per_count):
+        self._encoder = encoder
+        self._bridge = bridge
+        self._deg_per_count = deg_per_count
+
+    def read_angle(self):
+        return self._encoder.count() * self._deg_per_count
+
+    def write_duty(self, duty_pct):
+        # Controllers work in the user frame (the bridge applies `invert`); their duty 0 means
+        # "brake": the bridge shorts the winding rather than letting go.
+        if duty_pct == 0:
+            self._bridge.brake()
+        else:
+            self._bridge._drive(duty_pct)
+
+    def coast(self):
+        self._bridge.coast()

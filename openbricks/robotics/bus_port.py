@@ -125,12 +125,16 @@ class BusPort:
         for servo in self._servos.values():
             servo.coast()
 
-    def _servo(self, slot, what):
-        """The native servo controller that runs direct commands on `slot`, now driving it."""
+    def _servo(self, slot, what, motion=True):
+        """The native servo controller that runs direct commands on `slot`, now driving it.
+
+        A `motion` command is refused while the e-stop is engaged; a stop (brake, hold) is not,
+        as on a motor no drive base adopted."""
         import _openbricks_native
 
         motor = self._motors[slot]
-        estop.check("%s.%s" % (motor.side or type(motor).__name__, what))
+        if motion:
+            estop.check("%s.%s" % (motor.side or type(motor).__name__, what))
         self._take_from_drivebase(slot)
         servo = self._servos.get(slot)
         if servo is None:
@@ -190,7 +194,7 @@ class BusPort:
 
     def brake(self, slot):
         # Like the servo's own brake: ramp to zero speed and hold that rate.
-        self._servo(slot, "brake").run_speed(0)
+        self._servo(slot, "brake", motion=False).run_speed(0)
 
     def coast(self, slot):
         # Releasing a wheel is always allowed, e-stop or not, and needs no controller of its own.
@@ -203,7 +207,7 @@ class BusPort:
 
     def hold(self, slot):
         self._checked(slot)
-        self._servo(slot, "hold").hold()
+        self._servo(slot, "hold", motion=False).hold()
 
     def set_duty_limit(self, slot, limit_pct):
         self._limits[slot] = limit_pct

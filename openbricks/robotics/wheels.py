@@ -3,9 +3,10 @@
 - Serial-bus servos (ST3215Motor, ST3032Motor): adopted onto the bus engine, which drives each
   wheel's bridge in duty mode and reads its encoder; the controller ticks through the engine's
   motor IO (natively in the simulator and on the hub).
-- Encoder motors (JGB37Motor, MG370Motor): the controller reads the encoder and writes the bridge
-  that the motor's own native servo core otherwise drives; that servo stands down while the drive
-  base drives.
+- Encoder motors (JGB37Motor, MG370Motor): the controller drives the motor's own IO (encoder in,
+  bridge out) while the motor's native servo core stands down (`give_to_drivebase`). A direct
+  command on either motor takes its wheel back through `let_go()`: the drive base's move ends and
+  both wheels coast, as Pybricks does when a drive base motor is used directly.
 - Anything else with dc/brake/coast (L298NMotor, TB6612Motor, or an encoder motor on a build without
   the native cores): open loop. No feedback, so no controller.
 
@@ -43,8 +44,8 @@ def _is_serial_bus(motor):
 
 
 def _is_encoder_motor(motor):
-    # The native servo core's three IO hooks; _servo is None on a build without the cores.
-    return getattr(motor, "_servo", None) is not None and hasattr(motor, "_sensor_deg")
+    # closed_loop is False on a build without the native servo core: such a motor is open loop.
+    return callable(getattr(motor, "give_to_drivebase", None)) and getattr(motor, "closed_loop", False)
 
 
 def pair_for(left, right):
@@ -119,18 +120,34 @@ class _Pair:
 class EncoderPair(_Pair):
     kind = "encoder"
 
+    def __init__(self, left, right):
+        _Pair.__init__(self, left, right)
+        self._controller = None  # the drive base controller driving both bridges, while one does
+
     def controller_io(self):
         io = {}
         for i, side in enumerate(SIDES):
-            motor = self.motors[i]
-            io["read_" + side] = motor._sensor_deg
-            io["write_" + side] = motor._write_duty
-            io["coast_" + side] = motor._bridge.coast
+            io.update(io_kwargs(self.motors[i].motor_io(), side))
         return io
 
     def _hand_over(self, controller, process):
+        self._controller = controller
         for motor in self.motors:
-            process.unsubscribe(motor._servo)  # one driver per bridge
+            motor.give_to_drivebase(self)  # its own core stands down: one driver per bridge
+
+    def let_go(self):
+        """A direct command on one wheel took it back: end the move and free both wheels (coasting)."""
+        controller = self._controller
+        if controller is not None:
+            controller.stop("coast")
+            self.release(controller)
+
+    def release(self, controller):
+        _Pair.release(self, controller)
+        for motor in self.motors:
+            motor.forget_drivebase(self)
+        if self._controller is controller:
+            self._controller = None
 
 
 class OpenLoopPair(_Pair):

@@ -337,3 +337,62 @@ def test_a_second_drive_base_over_the_same_motors_takes_them_from_the_first():
     x = robot.chassis.x_mm
     time.sleep_ms(300)
     assert approx(robot.chassis.x_mm, x, 1)
+
+
+def test_a_direct_command_takes_the_wheel_back_and_the_next_move_retakes_both():
+    import _openbricks_native
+
+    robot = EncoderRobot()
+    db = robot.drivebase()
+    db.straight(1000, then="hold", wait=False)
+    time.sleep_ms(500)
+    robot.left.run_speed(200)  # Pybricks: using a drive base motor directly stops the drive base
+    assert db.done()  # the move was ended, not left pending
+    time.sleep_ms(700)
+    since_ms = time.ticks_ms()
+    time.sleep_ms(300)
+    # One driver per bridge: the left duty follows its own speed loop alone, steady at cruise (a drive
+    # base still holding would pull it the other way every tick) and nothing drives the right bridge.
+    duties = [duty for at_ms, duty in robot.rigs[0].duty_log if at_ms >= since_ms]
+    duties.append(robot.bridge_duties()[0])
+    assert min(duties) > 0 and max(duties) - min(duties) < 5
+    assert approx(robot.wheel_speeds_dps()[0], 200, 8)
+    assert robot.bridge_duties()[1] is None
+    assert _openbricks_native.motor_process.count == 1
+    db.straight(100)  # the drive base takes both bridges back: the left's speed loop stands down
+    travel, heading = robot.chassis.travel_mm, robot.chassis.heading_deg
+    db.straight(100)
+    assert approx(robot.chassis.travel_mm - travel, 100, 2)
+    assert approx(robot.chassis.heading_deg, heading, 1)
+    assert _openbricks_native.motor_process.count == 1
+
+
+def test_reading_a_wheel_leaves_the_drive_base_driving_it():
+    robot = EncoderRobot()
+    robot.left.run_speed(-100)  # the motor's own core had a command of its own before the drive base
+    db = robot.drivebase()
+    db.drive(150, 0)
+    time.sleep_ms(600)
+    robot.left.speed()
+    robot.left.stalled()
+    robot.left.angle()
+    time.sleep_ms(600)
+    _distance, speed_mm_s, _angle, _rate = db.state()
+    assert approx(speed_mm_s, 150, 5)
+    assert approx(robot.wheel_speeds_dps()[0], robot.wheel_speeds_dps()[1], 5)
+    db.stop()
+
+
+def test_a_stop_on_a_drive_base_wheel_is_allowed_during_an_estop_and_motion_is_refused():
+    robot = EncoderRobot()
+    db = robot.drivebase()
+    db.drive(150, 0)
+    time.sleep_ms(300)
+    estop.engage("test")
+    robot.left.brake()  # stops are always allowed, as on a motor no drive base drives
+    time.sleep_ms(2)
+    assert robot.bridge_duties()[0] == 0.0
+    with raises(estop.EStopError, "JGB37Motor run_speed() refused"):
+        robot.left.run_speed(100)
+    with raises(estop.EStopError, "DriveBase.straight refused"):
+        db.straight(100)

@@ -195,3 +195,17 @@ def test_a_second_drive_base_over_the_same_wheels_reuses_their_slots():
 def test_the_engine_is_only_installed_for_these_tests():
     serial_bus_engine.uninstall()
     assert not hasattr(_openbricks_native, "serial_bus")
+
+
+def test_brake_and_hold_on_an_adopted_wheel_are_allowed_during_an_estop():
+    robot = ServoRobot()
+    robot.drivebase()
+    robot.left.run_speed(300)
+    time.sleep_ms(300)
+    estop.engage("test")
+    robot.left.brake()  # stops are always allowed, as on a motor no drive base adopted
+    robot.right.hold()
+    time.sleep_ms(500)
+    assert abs(robot.servos[0].speed_dps()) < 2
+    with raises(estop.EStopError, "left wheel.dc refused: e-stop engaged"):
+        robot.left.dc(50)
