@@ -16,8 +16,10 @@ from micropython import const
 _TICK_HZ = const(1000)
 # Long enough for at least two ticks of a running 1 kHz tick, even with a late one in between.
 _PROBE_MS = const(5)
-# A virtual timer where the port has them; only hosts without a native tick ever reach this.
-_TIMER_ID = const(-1)
+# Only hosts without a native tick reach the fallback (the ESP32 firmware ticks itself). The ESP32
+# port has no virtual timers, only hardware timers 0..3, each owned by one user: 0 launcher, 1 BLE
+# button, 2 BLE REPL pump, 3 IMU sampling. The BLE button's is taken because no such host runs one.
+_TIMER_ID = const(1)
 
 _state = {"timer": None}
 

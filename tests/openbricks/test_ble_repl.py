@@ -185,6 +185,7 @@ def test_full_controller_buffers_delay_output_but_lose_none():
     radio.limit_notifications(2)
     text = bytes(range(48, 48 + 64)) * 3
     dupterm.repl_print(text)
+    time.sleep_ms(0)  # the flush repl_print scheduled runs at the next pending check, not inside it
     assert len(radio.notifications(conn)) == 2
     radio.limit_notifications(None)  # the controller drained its queue
     settle()

@@ -5,7 +5,7 @@ import time
 
 import machine
 
-from fakes import tmpdir
+from fakes import clock, tmpdir
 from fakes.expect import raises
 from openbricks import estop, launcher, log, pins
 
@@ -21,8 +21,7 @@ def _stage(directory, source, name="program.py"):
 
 def _at(ms, fn):
     """Do `fn()` when the virtual clock reaches `ms` from now (a press scheduled into the future)."""
-    timer = machine.Timer(-1)
-    timer.init(mode=machine.Timer.ONE_SHOT, period=ms, callback=lambda _t: fn())
+    clock.after_ms(ms, fn)
 
 
 def _press(at_ms, hold_ms=150):

@@ -50,6 +50,10 @@ def install():
 
 def reset():
     clock.reset()
+    if not _IS_MICROPYTHON:
+        from . import micropython  # MicroPython has its own scheduler
+
+        micropython.reset()
     esp32.reset()
     machine.board.reset()
     bluetooth.reset()

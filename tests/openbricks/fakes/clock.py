@@ -20,6 +20,9 @@ EPOCH_2000_S = 946684800
 
 _state = {"now_us": 0, "epoch_base_us": EPOCH_2000_S * 1_000_000, "in_advance": False}
 _timers = []  # objects with .next_due_us and .fire(); machine.Timer registers here
+# What runs "between bytecodes" on the hub: the fake micropython.schedule queue registers its runner
+# here (CPython only; on MicroPython the real VM runs scheduled callbacks itself).
+_pending_runner = [None]
 
 
 def reset():
@@ -43,6 +46,16 @@ def unregister_timer(timer):
         _timers.remove(timer)
 
 
+def set_pending_runner(run_pending):
+    _pending_runner[0] = run_pending
+
+
+def _run_pending():
+    run = _pending_runner[0]
+    if run is not None:
+        run()
+
+
 def advance_us(us):
     """Move virtual time forward by `us`, firing every timer callback that falls due on the way."""
     target = _state["now_us"] + int(us)
@@ -52,6 +65,7 @@ def advance_us(us):
         return
     _state["in_advance"] = True
     try:
+        _run_pending()
         while True:
             due = [t for t in _timers if t.next_due_us is not None and t.next_due_us <= target]
             if not due:
@@ -60,9 +74,43 @@ def advance_us(us):
             if first.next_due_us > _state["now_us"]:
                 _state["now_us"] = first.next_due_us
             first.fire()
+            _run_pending()
         _state["now_us"] = max(_state["now_us"], target)
     finally:
         _state["in_advance"] = False
+
+
+class WorldEvent:
+    """Something the outside world does at a virtual time (a button press, a line sliding under a
+    sensor). Tests use these rather than machine.Timer: the hub's four hardware timers belong to
+    the runtime under test, and a failing world event is a broken test, so it is not swallowed."""
+
+    def __init__(self, delay_us, action, period_us=0):
+        self._action = action
+        self._period_us = period_us
+        self.next_due_us = _state["now_us"] + delay_us
+        register_timer(self)
+
+    def fire(self):
+        if self._period_us:
+            self.next_due_us += self._period_us
+        else:
+            self.cancel()
+        self._action()
+
+    def cancel(self):
+        self.next_due_us = None
+        unregister_timer(self)
+
+
+def after_ms(delay_ms, action):
+    """Call action() once, `delay_ms` of virtual time from now."""
+    return WorldEvent(int(delay_ms * 1000), action)
+
+
+def every_ms(period_ms, action):
+    """Call action() every `period_ms` of virtual time until the returned event is cancelled."""
+    return WorldEvent(int(period_ms * 1000), action, int(period_ms * 1000))
 
 
 def set_epoch_ms(epoch_ms):
@@ -98,17 +146,17 @@ def ticks_diff(end, start):
 
 
 def sleep_us(us):
-    if us > 0:
+    if us >= 0:  # a zero sleep still runs what is scheduled, as on the hub
         advance_us(us)
 
 
 def sleep_ms(ms):
-    if ms > 0:
+    if ms >= 0:
         advance_us(int(ms * 1000))
 
 
 def sleep(seconds):
-    if seconds > 0:
+    if seconds >= 0:
         advance_us(int(seconds * 1_000_000))
 
 

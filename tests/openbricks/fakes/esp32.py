@@ -2,6 +2,10 @@
 
 _store = {}  # namespace -> {key: value}; committed values only
 
+# The port raises ESP-IDF errors as OSError(-code, name).
+ESP_ERR_NVS_NOT_FOUND = -4354
+ESP_ERR_NVS_INVALID_LENGTH = -4364
+
 
 def reset():
     _store.clear()
@@ -15,7 +19,7 @@ class NVS:
     def _get(self, key):
         committed = _store.get(self._namespace, {})
         if key not in committed:
-            raise OSError(-4354)  # ESP_ERR_NVS_NOT_FOUND, as the port raises it
+            raise OSError(ESP_ERR_NVS_NOT_FOUND, "ESP_ERR_NVS_NOT_FOUND")
         return committed[key]
 
     def set_i32(self, key, value):
@@ -29,6 +33,9 @@ class NVS:
 
     def get_blob(self, key, buffer):
         value = self._get(key)
+        if len(buffer) < len(value):
+            # The port reads into the caller's buffer as it is; a short one is refused, never grown.
+            raise OSError(ESP_ERR_NVS_INVALID_LENGTH, "ESP_ERR_NVS_INVALID_LENGTH")
         buffer[: len(value)] = value
         return len(value)
 

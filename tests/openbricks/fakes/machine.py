@@ -8,6 +8,8 @@ test's handle on the outside world: input levels, analog voltages, pulse
 widths, and what the runtime drove.
 """
 
+import sys
+
 from . import clock
 
 
@@ -29,6 +31,7 @@ class _Board:
         self.pulses_us = {}  # echo pin id -> pulse width time_pulse_us() returns (-1/-2 on timeout)
         self.bitstreams = []  # (pin id, timing, bytes) written by machine.bitstream
         self.encoders = {}  # PCNT unit -> the Encoder counting on it; tests move its .count
+        self.timers = {}  # hardware timer id -> the one alarm every machine.Timer(id) shares
         self.rtc_datetime = None
         self.resets = 0
 
@@ -240,43 +243,87 @@ class Encoder:
         self.deinited = True
 
 
+# The ESP32-S3 has two timer groups of two general-purpose timers; the port numbers them 0..3 and
+# has no virtual (id -1) timers.
+HARDWARE_TIMER_COUNT = 4
+
+
+class _HardwareTimer:
+    """One of the chip's timers. Every machine.Timer(id) built for the same id drives this one
+    alarm, so a second init() on the same id replaces the first one's callback, as on the hub."""
+
+    def __init__(self, timer_id):
+        self.timer_id = timer_id
+        self.next_due_us = None
+        self.period_us = 0
+        self.mode = Timer.PERIODIC
+        self.callback = None
+        self.owner = None  # the Timer object whose init() armed it; the callback receives it
+
+    def arm(self, owner, mode, period_us, callback):
+        self.owner = owner
+        self.mode = mode
+        self.period_us = period_us
+        self.callback = callback
+        self.next_due_us = clock.now_us() + period_us
+        clock.register_timer(self)
+
+    def disarm(self):
+        self.next_due_us = None
+        clock.unregister_timer(self)
+
+    def fire(self):
+        callback = self.callback
+        if self.mode == Timer.PERIODIC:
+            self.next_due_us += self.period_us
+        else:
+            self.disarm()
+        if callback is None:
+            return
+        try:
+            callback(self.owner)
+        except Exception as exc:  # noqa: BLE001 - the hub prints a failing timer callback and carries on
+            # On the hub the callback runs from the scheduler, which prints what it raised and goes
+            # on: the program that was sleeping never sees it, and the timer keeps firing.
+            sys.print_exception(exc)
+
+
 class Timer:
     ONE_SHOT = 0
     PERIODIC = 1
 
-    def __init__(self, id=-1, **kwargs):
+    def __init__(self, id, **kwargs):
+        if not isinstance(id, int) or not 0 <= id < HARDWARE_TIMER_COUNT:
+            raise ValueError(
+                "Timer(%r) doesn't exist: the ESP32 has hardware timers 0..%d and no virtual timers"
+                % (id, HARDWARE_TIMER_COUNT - 1)
+            )
         self._id = id
-        self.next_due_us = None
-        self._period_us = 0
-        self._mode = Timer.PERIODIC
-        self._callback = None
+        self._hardware = board.timers.get(id)
+        if self._hardware is None:
+            self._hardware = board.timers[id] = _HardwareTimer(id)
         if kwargs:
             self.init(**kwargs)
 
     def init(self, mode=PERIODIC, period=-1, freq=-1, callback=None):
         if freq is not None and freq > 0:
-            self._period_us = 1_000_000 // freq
+            period_us = 1_000_000 // freq
         else:
-            self._period_us = int(period) * 1000
-        if self._period_us <= 0:
+            period_us = int(period) * 1000
+        if period_us <= 0:
             raise ValueError("Timer needs period= or freq=")
-        self._mode = mode
-        self._callback = callback
-        self.next_due_us = clock.now_us() + self._period_us
-        clock.register_timer(self)
+        self._hardware.arm(self, mode, period_us, callback)
 
     def deinit(self):
-        self.next_due_us = None
-        clock.unregister_timer(self)
+        self._hardware.disarm()
 
-    def fire(self):
-        callback = self._callback
-        if self._mode == Timer.PERIODIC:
-            self.next_due_us += self._period_us
-        else:
-            self.deinit()
-        if callback is not None:
-            callback(self)
+    @property
+    def next_due_us(self):
+        """When this timer's hardware alarm fires next (None while stopped); for tests."""
+        return self._hardware.next_due_us
+
+    def __repr__(self):
+        return "Timer(%d)" % self._id
 
 
 class RTC:

@@ -1,10 +1,34 @@
 """A fake `micropython` module for CPython: the few helpers the runtime calls."""
 
-_scheduled = []
+import sys
+
+from . import clock
+
+# MICROPY_SCHEDULER_DEPTH on the ESP32 port: callbacks pending at once before schedule() refuses.
+SCHEDULER_DEPTH = 8
+
+_scheduled = []  # (fn, arg) waiting for the VM's next pending check
 
 
 def reset():
+    """A soft reset drops whatever was still queued."""
     del _scheduled[:]
+
+
+def run_pending():
+    """Run what is queued, oldest first, as the VM does between bytecodes.
+
+    A callback that raises is printed and dropped, as the port's scheduler does; a callback that
+    schedules another leaves it for the next pending check, so a self-rescheduling callback cannot
+    starve the program.
+    """
+    batch = _scheduled[:]
+    del _scheduled[:]
+    for fn, arg in batch:
+        try:
+            fn(arg)
+        except Exception as exc:  # noqa: BLE001 - printed and dropped, as on the hub
+            sys.print_exception(exc)
 
 
 def const(value):
@@ -12,8 +36,14 @@ def const(value):
 
 
 def schedule(fn, arg):
-    # The ESP32 port runs scheduled callbacks between bytecodes soon after; run them now.
-    fn(arg)
+    """Queue fn(arg) to run later: at the next virtual-clock advance (a sleep, a wait), never inside
+    this call, as on the hub, where it runs between bytecodes after the caller returns."""
+    if len(_scheduled) >= SCHEDULER_DEPTH:
+        raise RuntimeError("schedule queue full")
+    _scheduled.append((fn, arg))
+
+
+clock.set_pending_runner(run_pending)
 
 
 def alloc_emergency_exception_buf(size):

@@ -9,7 +9,7 @@ right. The model writes the readings into `machine.board.analog`, and
 the robot across the line while `calibrate()` runs.
 """
 
-from . import machine
+from . import clock, machine
 
 
 class LineMat:
@@ -49,12 +49,11 @@ class LineMat:
         state = {"t_ms": 0}
         self.place_line(from_center_mm, width_mm)
 
-        def step(timer):
+        def step():
             state["t_ms"] += step_ms
             f = min(1.0, state["t_ms"] / duration_ms)
             self.place_line(from_center_mm + (to_center_mm - from_center_mm) * f, width_mm)
             if f >= 1.0:
-                timer.deinit()
+                self._sweep.cancel()
 
-        self._timer = machine.Timer(-1)
-        self._timer.init(mode=machine.Timer.PERIODIC, period=step_ms, callback=step)
+        self._sweep = clock.every_ms(step_ms, step)
