@@ -7,7 +7,9 @@ simulated reboot); bind() points the module at it.
 
 _store = [{}]
 
+# The port raises ESP-IDF errors as OSError(-code, name).
 ESP_ERR_NVS_NOT_FOUND = -4354
+ESP_ERR_NVS_INVALID_LENGTH = -4364
 
 
 def bind(store):
@@ -24,7 +26,7 @@ class NVS:
     def _get(self, key):
         committed = _store[0].get(self._namespace, {})
         if key not in committed:
-            raise OSError(ESP_ERR_NVS_NOT_FOUND)
+            raise OSError(ESP_ERR_NVS_NOT_FOUND, "ESP_ERR_NVS_NOT_FOUND")
         return committed[key]
 
     def set_i32(self, key, value):
@@ -38,6 +40,9 @@ class NVS:
 
     def get_blob(self, key, buffer):
         value = self._get(key)
+        if len(buffer) < len(value):
+            # The port reads into the caller's buffer as it is; a short one is refused, never grown.
+            raise OSError(ESP_ERR_NVS_INVALID_LENGTH, "ESP_ERR_NVS_INVALID_LENGTH")
         buffer[: len(value)] = value
         return len(value)
 

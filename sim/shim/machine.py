@@ -7,6 +7,8 @@ watchers, and Timer callbacks run on the simulated clock. Transfers take the
 simulated time they take on the wire.
 """
 
+import sys
+
 from . import mptime
 
 _board = [None]  # the SimBoard of the running program
@@ -92,7 +94,9 @@ class Pin:
     def off(self):
         self._drive(0)
 
-    def irq(self, handler=None, trigger=IRQ_FALLING | IRQ_RISING, hard=False, **kwargs):
+    def irq(self, handler=None, trigger=IRQ_FALLING | IRQ_RISING, wake=None):
+        # The ESP32 port's signature: no `hard=` (pin handlers are always scheduled), so a program
+        # passing one gets the TypeError it would get on the hub.
         self._handler = handler
         self._trigger = trigger
 
@@ -243,17 +247,28 @@ class Encoder:
         pass
 
 
+# The ESP32-S3's four general-purpose timers; the port has no virtual (id -1) timers.
+HARDWARE_TIMER_COUNT = 4
+
+
 class Timer:
+    """A hardware timer. Timer(id) names one of the chip's timers, so every Timer built for the
+    same id drives one alarm: a second init() replaces the first one's callback, as on the hub."""
+
     ONE_SHOT = 0
     PERIODIC = 1
 
-    def __init__(self, id=-1, **kwargs):
+    def __init__(self, id, **kwargs):
+        if not isinstance(id, int) or not 0 <= id < HARDWARE_TIMER_COUNT:
+            raise ValueError(
+                f"Timer({id!r}) doesn't exist: the ESP32 has hardware timers 0..{HARDWARE_TIMER_COUNT - 1}"
+                " and no virtual timers"
+            )
         self._id = id
-        self._handle = None
         if kwargs:
             self.init(**kwargs)
 
-    def init(self, mode=PERIODIC, period=-1, freq=-1, callback=None, **kwargs):
+    def init(self, mode=PERIODIC, period=-1, freq=-1, callback=None):
         if freq is not None and freq > 0:
             period_us = 1_000_000 // freq
         else:
@@ -261,23 +276,34 @@ class Timer:
         if period_us <= 0:
             raise ValueError("Timer: give period= (ms) or freq= (Hz)")
         self.deinit()
-        clock = _sim().clock
+        board = _sim()
 
         def fire():
             if mode == Timer.ONE_SHOT:
-                self._handle = None
-            if callback is not None:
+                board.hardware_timers.pop(self._id, None)
+            if callback is None:
+                return
+            try:
                 callback(self)
+            except Exception as exc:  # noqa: BLE001 - the hub prints a failing callback and carries on
+                # The port runs timer callbacks from its scheduler, which prints what they raise;
+                # the program that was sleeping never sees it and the timer keeps firing.
+                sys.print_exception(exc)
 
-        self._handle = clock.schedule(fire, period_us, period_us if mode == Timer.PERIODIC else 0)
+        board.hardware_timers[self._id] = board.clock.schedule(
+            fire, period_us, period_us if mode == Timer.PERIODIC else 0
+        )
 
     def deinit(self):
-        if self._handle is not None:
-            self._handle.cancel()
-            self._handle = None
+        handle = _sim().hardware_timers.pop(self._id, None)
+        if handle is not None:
+            handle.cancel()
 
     def value(self):
         return 0
+
+    def __repr__(self):
+        return f"Timer({self._id})"
 
 
 class WDT:

@@ -1,10 +1,13 @@
 """MicroPython's `micropython` module for a program running in the simulator."""
 
+import sys
+
 _clock = [None]
 
 
 def bind(clock):
     _clock[0] = clock
+    del _queued[:]  # a new hub starts with an empty queue
 
 
 def const(value):
@@ -19,13 +22,30 @@ def viper(fn):
     return fn
 
 
+# MICROPY_SCHEDULER_DEPTH on the ESP32 port: callbacks pending at once before schedule() refuses.
+SCHEDULER_DEPTH = 8
+
+_queued = []  # clock handles of scheduled callbacks; a handle is cancelled once run or soft-reset away
+
+
 def schedule(fn, arg):
-    """Run fn(arg) "soon", as the ESP32 port does: at the next moment simulated time moves on."""
+    """Queue fn(arg) to run "soon", as the ESP32 port does: at the next moment simulated time moves
+    on, never inside this call. A full queue refuses, and a callback that raises is printed and
+    dropped, as the port's scheduler does."""
+    _queued[:] = [handle for handle in _queued if not handle.cancelled]
+    if len(_queued) >= SCHEDULER_DEPTH:
+        raise RuntimeError("schedule queue full")
     clock = _clock[0]
     if clock is None:
-        fn(arg)
-        return
-    clock.schedule(lambda: fn(arg), 0)
+        raise RuntimeError("micropython.schedule needs the simulated clock: bind() it first")
+
+    def run():
+        try:
+            fn(arg)
+        except Exception as exc:  # noqa: BLE001 - printed and dropped, as on the hub
+            sys.print_exception(exc)
+
+    _queued.append(clock.schedule(run, 0))
 
 
 def alloc_emergency_exception_buf(size):
