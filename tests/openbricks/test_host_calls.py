@@ -89,8 +89,7 @@ def test_set_rtc_makes_log_stamps_real_utc_times():
 
 
 def test_stage_writes_the_program_atomically_and_verifies_it():
-    directory = tmpdir.make()
-    try:
+    with tmpdir.scratch() as directory:
         path = directory + "/program.mpy"
         program = b"M\x06\x00\x1f" + bytes(range(256)) * 4
         result = host_calls.stage(_b64(program), path, size=len(program), crc32=binascii.crc32(program))
@@ -103,13 +102,10 @@ def test_stage_writes_the_program_atomically_and_verifies_it():
         assert not _exists(path + ".part")
         short = host_calls.stage(_b64(program[:100]), path, size=len(program))
         assert not short["ok"] and "upload truncated: got 100 bytes, expected 1028" in short["error"]
-    finally:
-        tmpdir.remove(directory)
 
 
 def test_a_compressed_program_is_inflated_and_checked_against_its_crc():
-    directory = tmpdir.make()
-    try:
+    with tmpdir.scratch() as directory:
         path = directory + "/program.py"
         result = host_calls.stage(
             ZLIB_PROGRAM_B64, path, compression="zlib", size=ZLIB_PROGRAM_BYTES, crc32=ZLIB_PROGRAM_CRC32
@@ -118,24 +114,18 @@ def test_a_compressed_program_is_inflated_and_checked_against_its_crc():
         text = _read(path).decode()
         assert text.startswith("from openbricks.tools import wait\n")
         assert text.count("\n") == 41
-    finally:
-        tmpdir.remove(directory)
 
 
 def test_staging_one_form_removes_the_stale_other_so_the_launcher_runs_the_new_program():
-    directory = tmpdir.make()
-    try:
+    with tmpdir.scratch() as directory:
         host_calls.stage(_b64(b"print('old source')\n"), directory + "/program.py")
         host_calls.stage(_b64(b"M\x06\x00\x1f"), directory + "/program.mpy")
         assert not _exists(directory + "/program.py")
         assert launcher.resolve_program(directory + "/program.mpy") == directory + "/program.mpy"
-    finally:
-        tmpdir.remove(directory)
 
 
 def test_chunked_upload_with_compression_lands_whole():
-    directory = tmpdir.make()
-    try:
+    with tmpdir.scratch() as directory:
         path = directory + "/program.py"
         compressed = binascii.a2b_base64(ZLIB_PROGRAM_B64.encode())
         assert host_calls.stage_begin(path)["ok"]
@@ -147,26 +137,20 @@ def test_chunked_upload_with_compression_lands_whole():
         assert _read(path).count(b"\n") == 41
         orphan = host_calls.stage_append(_b64(b"more"))
         assert not orphan["ok"] and "call stage_begin(path) first" in orphan["error"]
-    finally:
-        tmpdir.remove(directory)
 
 
 def test_oversized_programs_and_bad_paths_are_refused_with_the_limit():
-    directory = tmpdir.make()
-    try:
+    with tmpdir.scratch() as directory:
         big = bytes(host_calls.MAX_PROGRAM_BYTES + 1)
         result = host_calls.stage(big, directory + "/program.mpy", encoding="raw")
         assert not result["ok"] and "larger than the hub accepts (262144 bytes max)" in result["error"]
         assert not _exists(directory + "/program.mpy")
         assert "absolute file path" in host_calls.stage(_b64(b"x"), "program.py")["error"]
         assert "absolute file path" in host_calls.stage(_b64(b"x"), "/../etc/x")["error"]
-    finally:
-        tmpdir.remove(directory)
 
 
 def test_run_streams_the_program_output_then_the_result_line():
-    directory = tmpdir.make()
-    try:
+    with tmpdir.scratch() as directory:
         path = directory + "/program.py"
         host_calls.stage(_b64(b"print('hello from the hub')\n"), path)
         launcher.get(program_path=path, log_dir=directory + "/logs")
@@ -177,13 +161,10 @@ def test_run_streams_the_program_output_then_the_result_line():
             console.close()
         assert console.results() == [{"ok": True, "outcome": "finished", "run": 0}]
         assert "hello from the hub" in log.read_run(0, directory + "/logs")
-    finally:
-        tmpdir.remove(directory)
 
 
 def test_a_stopped_run_reports_then_propagates_the_interrupt():
-    directory = tmpdir.make()
-    try:
+    with tmpdir.scratch() as directory:
         path = directory + "/program.py"
         host_calls.stage(_b64(b"raise KeyboardInterrupt\n"), path)
         launcher.get(program_path=path, log_dir=directory + "/logs")
@@ -194,23 +175,17 @@ def test_a_stopped_run_reports_then_propagates_the_interrupt():
         finally:
             console.close()
         assert console.results() == [{"ok": True, "outcome": "stopped", "run": 0}]
-    finally:
-        tmpdir.remove(directory)
 
 
 def test_run_without_a_staged_program_says_how_to_stage_one():
-    directory = tmpdir.make()
-    try:
+    with tmpdir.scratch() as directory:
         launcher.get(program_path=directory + "/program.mpy", log_dir=directory + "/logs")
         result = host_calls.run()
         assert not result["ok"] and "upload one with `openbricks upload` or `run`" in result["error"]
-    finally:
-        tmpdir.remove(directory)
 
 
 def test_logs_are_listed_and_paged_in_whole_lines():
-    directory = tmpdir.make()
-    try:
+    with tmpdir.scratch() as directory:
         log_dir = directory + "/logs"
         for n in range(2):
             with log.session(log_dir):
@@ -230,8 +205,6 @@ def test_logs_are_listed_and_paged_in_whole_lines():
         assert "".join(pieces) == whole and len(pieces) > 5
         gone = host_calls.read_run(7, log_dir=log_dir)
         assert not gone["ok"] and "run 7 is not on the hub" in gone["error"]
-    finally:
-        tmpdir.remove(directory)
 
 
 def test_record_provenance_is_what_the_next_label_reports():

@@ -27,8 +27,7 @@ def _slices(path, size):
 
 
 def test_a_file_comes_back_whole_in_slices_each_with_its_own_size_and_crc():
-    directory = tmpdir.make()
-    try:
+    with tmpdir.scratch() as directory:
         path = directory + "/blob.bin"
         data = bytes(range(256)) * 11 + b"tail"
         _write(path, data)
@@ -40,13 +39,10 @@ def test_a_file_comes_back_whole_in_slices_each_with_its_own_size_and_crc():
         assert b"".join(pieces) == data
         for i in range(len(replies)):
             assert replies[i]["crc32"] == binascii.crc32(pieces[i]) & 0xFFFFFFFF
-    finally:
-        tmpdir.remove(directory)
 
 
 def test_one_reply_never_carries_more_than_the_hub_cap_however_much_is_asked():
-    directory = tmpdir.make()
-    try:
+    with tmpdir.scratch() as directory:
         path = directory + "/big.bin"
         _write(path, b"x" * (host_calls.READ_FILE_MAX_BYTES + 10))
         first = host_calls.read_file(path, 0, 1000000)
@@ -54,13 +50,10 @@ def test_one_reply_never_carries_more_than_the_hub_cap_however_much_is_asked():
         assert first["next_offset"] == host_calls.READ_FILE_MAX_BYTES
         last = host_calls.read_file(path, first["next_offset"])
         assert last["bytes"] == 10 and last["next_offset"] is None
-    finally:
-        tmpdir.remove(directory)
 
 
 def test_an_empty_file_and_an_offset_past_the_end_read_as_nothing_left():
-    directory = tmpdir.make()
-    try:
+    with tmpdir.scratch() as directory:
         path = directory + "/empty.txt"
         _write(path, b"")
         empty = host_calls.read_file(path)
@@ -68,20 +61,15 @@ def test_an_empty_file_and_an_offset_past_the_end_read_as_nothing_left():
         _write(path, b"abc")
         beyond = host_calls.read_file(path, 10)
         assert beyond["ok"] and beyond["bytes"] == 0 and beyond["next_offset"] is None
-    finally:
-        tmpdir.remove(directory)
 
 
 def test_a_missing_file_or_a_directory_is_refused_naming_the_path():
-    directory = tmpdir.make()
-    try:
+    with tmpdir.scratch() as directory:
         missing = host_calls.read_file(directory + "/nope.py")
         assert not missing["ok"] and missing["type"] == "OSError"
         assert "no file %s/nope.py on the hub" % directory in missing["error"]
         folder = host_calls.read_file(directory)
         assert not folder["ok"] and "is a directory, not a file" in folder["error"]
-    finally:
-        tmpdir.remove(directory)
 
 
 def test_bad_arguments_say_what_to_pass():

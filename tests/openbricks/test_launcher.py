@@ -45,8 +45,7 @@ def _log_lines(directory, index=None):
 
 
 def test_button_press_runs_the_program_and_its_prints_land_in_the_log():
-    directory = tmpdir.make()
-    try:
+    with tmpdir.scratch() as directory:
         hub = _hub(
             directory,
             "from openbricks.tools import wait\nfor i in range(3):\n    print('lap', i)\n    wait(100)\n",
@@ -60,13 +59,10 @@ def test_button_press_runs_the_program_and_its_prints_land_in_the_log():
         assert lines[2:5] == ["lap 0", "lap 1", "lap 2"]
         assert lines[5] == "stopped: finished after 300 ms"
         assert not launcher.program_running()
-    finally:
-        tmpdir.remove(directory)
 
 
 def test_an_exception_leaves_its_full_traceback_in_the_log():
-    directory = tmpdir.make()
-    try:
+    with tmpdir.scratch() as directory:
         source = "def drive(n):\n    return 100 // n\n\nprint('before')\ndrive(0)\n"
         hub = _hub(directory, source)
         _press(100)
@@ -78,13 +74,10 @@ def test_an_exception_leaves_its_full_traceback_in_the_log():
         assert 'program.py", line 2' in text  # and where it failed, inside drive()
         assert "ZeroDivisionError" in text
         assert _log_lines(directory)[-1].startswith("stopped: ZeroDivisionError")
-    finally:
-        tmpdir.remove(directory)
 
 
 def test_stop_press_engages_the_estop_and_frames_the_stop_in_the_log():
-    directory = tmpdir.make()
-    try:
+    with tmpdir.scratch() as directory:
         source = (
             "from openbricks import estop\n"
             "from openbricks.tools import wait\n"
@@ -105,13 +98,10 @@ def test_stop_press_engages_the_estop_and_frames_the_stop_in_the_log():
         assert lines[-1] == "stopped: KeyboardInterrupt (0 ms after press, 0 retries)"
         assert len(log.list_runs(directory + "/logs")) == 1  # the stopping press did not restart it
         assert not estop.engaged()
-    finally:
-        tmpdir.remove(directory)
 
 
 def test_a_program_that_swallows_the_interrupt_is_retried_until_dead():
-    directory = tmpdir.make()
-    try:
+    with tmpdir.scratch() as directory:
         source = (
             "import time\n"
             "survived = 0\n"
@@ -132,13 +122,10 @@ def test_a_program_that_swallows_the_interrupt_is_retried_until_dead():
         assert "swallowed 3" in lines
         # The press lands at 1100 ms; retries follow every 300 ms.
         assert lines[-1] == "stopped: KeyboardInterrupt (600 ms after press, 2 retries)"
-    finally:
-        tmpdir.remove(directory)
 
 
 def test_the_stopping_press_and_its_bounce_never_restart_the_robot():
-    directory = tmpdir.make()
-    try:
+    with tmpdir.scratch() as directory:
         hub = _hub(directory, "from openbricks.tools import wait\nwhile True:\n    wait(50)\n")
         _press(100)
         _press(1000, hold_ms=400)  # a long stop press: its release must not start a new run
@@ -150,13 +137,10 @@ def test_the_stopping_press_and_its_bounce_never_restart_the_robot():
         hub.idle(1500)
         assert [i for i, _p in log.list_runs(directory + "/logs")] == [0, 1]
         assert _log_lines(directory, 1)[1].startswith("started: button press")
-    finally:
-        tmpdir.remove(directory)
 
 
 def test_rotation_past_ten_runs_keeps_the_last_ten_readable():
-    directory = tmpdir.make()
-    try:
+    with tmpdir.scratch() as directory:
         hub = _hub(directory, "import time\nprint('run at', time.ticks_ms())\n")
         for _ in range(12):
             _press(100)
@@ -167,13 +151,10 @@ def test_rotation_past_ten_runs_keeps_the_last_ten_readable():
         assert _log_lines(directory, 11)[-1].startswith("stopped: finished")
         with raises(OSError, "run 1 is not on the hub"):
             log.read_run(1, directory + "/logs")
-    finally:
-        tmpdir.remove(directory)
 
 
 def test_a_runaway_printer_is_capped_at_64_kb_and_still_framed():
-    directory = tmpdir.make()
-    try:
+    with tmpdir.scratch() as directory:
         source = "from openbricks.tools import wait\nwhile True:\n    print('x' * 60)\n    wait(1)\n"
         hub = _hub(directory, source)
         _press(100)
@@ -183,13 +164,10 @@ def test_a_runaway_printer_is_capped_at_64_kb_and_still_framed():
         assert 64 * 1024 < len(text) <= 65 * 1024
         assert "log capped at 65536 bytes" in text
         assert text.rstrip("\n").endswith("stopped: KeyboardInterrupt (0 ms after press, 0 retries)")
-    finally:
-        tmpdir.remove(directory)
 
 
 def test_host_run_streams_output_and_a_console_ctrl_c_propagates_after_logging():
-    directory = tmpdir.make()
-    try:
+    with tmpdir.scratch() as directory:
         hub = _hub(directory, "print('working')\nraise KeyboardInterrupt\n")
         with raises(KeyboardInterrupt):
             hub.run_program("host run")
@@ -197,13 +175,10 @@ def test_host_run_streams_output_and_a_console_ctrl_c_propagates_after_logging()
         assert lines[1].startswith("started: host run |")
         assert lines[2] == "working"
         assert lines[-1] == "stopped: KeyboardInterrupt (Ctrl-C from the console)"
-    finally:
-        tmpdir.remove(directory)
 
 
 def test_running_state_is_signalled_to_listeners_and_program_claims_are_released():
-    directory = tmpdir.make()
-    try:
+    with tmpdir.scratch() as directory:
         source = (
             "from openbricks import launcher, pins\n"
             "pins.claim(5, 'HC-SR04 trig', 'HCSR04')\n"
@@ -221,38 +196,29 @@ def test_running_state_is_signalled_to_listeners_and_program_claims_are_released
         assert "running: True" in _log_lines(directory)
         assert pins.owner_of(5) is None
         assert pins.owner_of(BUTTON) == ("program button", "launcher")
-    finally:
-        tmpdir.remove(directory)
 
 
 def test_a_press_while_a_console_session_holds_the_hub_starts_nothing():
-    directory = tmpdir.make()
-    try:
+    with tmpdir.scratch() as directory:
         _hub(directory, "print('must not run')\n")
         _press(100)
         time.sleep_ms(1000)  # the main thread is busy elsewhere (a host session), not in idle()
         assert log.list_runs(directory + "/logs") == []
-    finally:
-        tmpdir.remove(directory)
 
 
 def test_the_program_button_pin_is_guarded_and_a_missing_program_is_named():
-    directory = tmpdir.make()
-    try:
+    with tmpdir.scratch() as directory:
         hub = launcher.Launcher(BUTTON, directory + "/program.mpy", log_dir=directory + "/logs")
         with raises(pins.ReservedPinError, "in use as the program button (owner: launcher)"):
             pins.claim(BUTTON, "L298N IN1", "L298N")
         with raises(OSError, "no program staged at %s/program.mpy" % directory):
             hub.run_program()
-    finally:
-        tmpdir.remove(directory)
 
 
 def test_presses_are_acknowledged_on_the_status_led_and_kept_in_the_event_ring():
     from openbricks import bluetooth_button
 
-    directory = tmpdir.make()
-    try:
+    with tmpdir.scratch() as directory:
         hub = _hub(directory, "from openbricks.tools import wait\nwhile True:\n    wait(20)\n")
         acks = []
         real_notify = bluetooth_button.notify_press
@@ -272,13 +238,10 @@ def test_presses_are_acknowledged_on_the_status_led_and_kept_in_the_event_ring()
             del launcher.print
         shown = [line.split(" ms  ", 1)[1] for line in printed]
         assert shown == ["press (idle)", "release -> start", "press -> stop", "release of a stopping press"]
-    finally:
-        tmpdir.remove(directory)
 
 
 def test_a_re_uploaded_helper_module_is_loaded_fresh_on_the_next_run():
-    directory = tmpdir.make()
-    try:
+    with tmpdir.scratch() as directory:
         hub = _hub(directory, "import helper\nprint('helper says', helper.VALUE)\n")
         _stage(directory, "VALUE = 1\n", "helper.py")
         hub.run_program()
@@ -287,13 +250,10 @@ def test_a_re_uploaded_helper_module_is_loaded_fresh_on_the_next_run():
         hub.run_program()
         assert "helper says 1" in _log_lines(directory, 0)
         assert "helper says 22" in _log_lines(directory, 1)
-    finally:
-        tmpdir.remove(directory)
 
 
 def test_a_starved_watcher_tick_leaves_a_note_naming_the_gap():
-    directory = tmpdir.make()
-    try:
+    with tmpdir.scratch() as directory:
         hub = _hub(directory, "from openbricks.tools import wait\nwait(8000)\n")
         # A callback that blocks for 6 s holds every other timer back, like a long C call on the hub.
         _at(600, lambda: time.sleep_ms(6000))
@@ -302,8 +262,6 @@ def test_a_starved_watcher_tick_leaves_a_note_naming_the_gap():
         assert len(notes) == 1
         assert notes[0].startswith("watcher tick starved for 60")  # ~6000 ms, at poll granularity
         assert "(slowest log write " in notes[0]
-    finally:
-        tmpdir.remove(directory)
 
 
 _RUNAWAY_MOTOR = (
@@ -316,8 +274,7 @@ _RUNAWAY_MOTOR = (
 
 
 def test_a_motor_left_running_is_halted_when_the_program_ends_or_fails():
-    directory = tmpdir.make()
-    try:
+    with tmpdir.scratch() as directory:
         hub = _hub(directory, _RUNAWAY_MOTOR + "print('driving', machine.board.pwms[17].duty_u16() > 0)\n")
         assert hub.run_program() == "finished"
         assert "driving True" in _log_lines(directory)
@@ -325,13 +282,10 @@ def test_a_motor_left_running_is_halted_when_the_program_ends_or_fails():
         _stage(directory, _RUNAWAY_MOTOR + "print(1 // 0)\n")
         assert hub.run_program() == "error"
         assert machine.board.pwms[17].duty_u16() == 0
-    finally:
-        tmpdir.remove(directory)
 
 
 def test_the_stop_press_halts_motors_at_once_and_refuses_new_motion():
-    directory = tmpdir.make()
-    try:
+    with tmpdir.scratch() as directory:
         source = _RUNAWAY_MOTOR + (
             "try:\n"
             "    while True:\n"
@@ -353,15 +307,12 @@ def test_the_stop_press_halts_motors_at_once_and_refuses_new_motion():
         refusals = [line for line in lines if line.startswith("refused: ")]
         assert len(refusals) == 1 and "dc() refused: e-stop engaged (program button)" in refusals[0]
         assert "duty after a new command 0" in lines
-    finally:
-        tmpdir.remove(directory)
 
 
 def test_the_next_program_can_rewire_the_servo_bus_the_last_one_used():
     from fakes.scs_servo import FakeServo, ScsBus
 
-    directory = tmpdir.make()
-    try:
+    with tmpdir.scratch() as directory:
         bus = ScsBus()
         bus.add(FakeServo(1))
         machine.board.attach_uart(1, bus)
@@ -373,13 +324,10 @@ def test_the_next_program_can_rewire_the_servo_bus_the_last_one_used():
         _stage(directory, motor % 6)
         assert hub.run_program() == "finished", "\n".join(_log_lines(directory))
         assert pins.owner_of(41) is None and pins.owner_of(6) is None
-    finally:
-        tmpdir.remove(directory)
 
 
 def test_a_press_with_nothing_staged_is_explained_and_the_button_keeps_working():
-    directory = tmpdir.make()
-    try:
+    with tmpdir.scratch() as directory:
         hub = launcher.Launcher(BUTTON, directory + "/program.py", log_dir=directory + "/logs")
         hub.start_watcher(0)
         printed = []
@@ -394,15 +342,12 @@ def test_a_press_with_nothing_staged_is_explained_and_the_button_keeps_working()
         _press(100)
         hub.idle(1000)
         assert "uploaded later" in _log_lines(directory)
-    finally:
-        tmpdir.remove(directory)
 
 
 def test_the_stop_press_halts_the_motors_before_paying_for_a_log_commit():
     # A littlefs commit costs 60-90 ms on the hub: at 500 mm/s that is 40 mm more travel if the
     # framing line is committed before the motors are told to stop.
-    directory = tmpdir.make()
-    try:
+    with tmpdir.scratch() as directory:
         events = []
         source = (
             "from openbricks import estop, launcher, log\n"
@@ -431,5 +376,3 @@ def test_the_stop_press_halts_the_motors_before_paying_for_a_log_commit():
         assert after_start[0] == "halt", events
         lines = _log_lines(directory)
         assert lines.index("button pressed -> stop") + 1 == lines.index("estop engaged")
-    finally:
-        tmpdir.remove(directory)

@@ -32,20 +32,16 @@ def _robot(directory, source):
 
 
 def test_a_serial_bus_drivebase_program_runs_again_after_it_finished():
-    directory = tmpdir.make()
-    try:
+    with tmpdir.scratch() as directory:
         hub, _bus = _robot(directory, _BUILD + "db.straight(30)\nprint('arrived')\n")
         for index in range(3):
             outcome = hub.run_program("host run", reraise_interrupt=False)
             assert outcome == "finished", log.read_run(index, directory + "/logs")
             assert "arrived" in log.read_run(index, directory + "/logs")
-    finally:
-        tmpdir.remove(directory)
 
 
 def test_a_program_that_fails_mid_drive_leaves_the_wheels_free():
-    directory = tmpdir.make()
-    try:
+    with tmpdir.scratch() as directory:
         hub, bus = _robot(
             directory,
             _BUILD + "db.drive(150, 0)\nwait_ms = 300\nimport time\n"
@@ -55,5 +51,3 @@ def test_a_program_that_fails_mid_drive_leaves_the_wheels_free():
         assert "ValueError: lost the line" in log.read_run(0, directory + "/logs")
         for servo_id in (1, 2):
             assert not bus.servo(servo_id).torque_enabled, "servo %d still drives its wheel" % servo_id
-    finally:
-        tmpdir.remove(directory)

@@ -20,8 +20,7 @@ def _one_run(log_dir, *texts, max_bytes=log.MAX_BYTES):
 
 
 def test_every_line_carries_the_utc_epoch_ms_and_the_header_names_the_run():
-    log_dir = tmpdir.make()
-    try:
+    with tmpdir.scratch() as log_dir:
         clock.set_epoch_ms(1783950123456)
         with log.session(log_dir) as sess:
             log.write("ambient: 33\n")
@@ -37,26 +36,20 @@ def test_every_line_carries_the_utc_epoch_ms_and_the_header_names_the_run():
             "1783950123461 second",
             "1783950123461 button pressed -> stop",
         ]
-    finally:
-        tmpdir.remove(log_dir)
 
 
 def test_a_note_after_an_unfinished_print_starts_its_own_line():
-    log_dir = tmpdir.make()
-    try:
+    with tmpdir.scratch() as log_dir:
         with log.session(log_dir) as sess:
             log.write("progress: 10%")
             log.note("estop engaged")
         lines = _lines(log.read_run(sess.index, log_dir))
         assert lines[1].endswith(" progress: 10%")
         assert lines[2].endswith(" estop engaged")
-    finally:
-        tmpdir.remove(log_dir)
 
 
 def test_prints_stay_in_ram_until_pumped_while_framing_is_committed_at_once():
-    log_dir = tmpdir.make()
-    try:
+    with tmpdir.scratch() as log_dir:
         with log.session(log_dir) as sess:
             log.write("hello\n")
             assert "hello" not in log.read_run(sess.index, log_dir)
@@ -65,13 +58,10 @@ def test_prints_stay_in_ram_until_pumped_while_framing_is_committed_at_once():
             assert "hello" in log.read_run(sess.index, log_dir)
             log.note("started: test")
             assert "started: test" in log.read_run(sess.index, log_dir)
-    finally:
-        tmpdir.remove(log_dir)
 
 
 def test_ten_slot_files_are_reused_and_indices_keep_growing():
-    log_dir = tmpdir.make()
-    try:
+    with tmpdir.scratch() as log_dir:
         for n in range(13):
             assert _one_run(log_dir, "run %d\n" % n) == n
         assert sorted(os.listdir(log_dir)) == sorted("slot_%d.log" % k for k in range(10))
@@ -83,13 +73,10 @@ def test_ten_slot_files_are_reused_and_indices_keep_growing():
             log.read_run(2, log_dir)
         with raises(OSError, "run 13 is not on the hub"):
             log.read_run(13, log_dir)
-    finally:
-        tmpdir.remove(log_dir)
 
 
 def test_a_reused_slot_holds_only_the_new_run():
-    log_dir = tmpdir.make()
-    try:
+    with tmpdir.scratch() as log_dir:
         _one_run(log_dir, "x" * 500 + "\n")
         for _ in range(9):
             _one_run(log_dir)
@@ -97,13 +84,10 @@ def test_a_reused_slot_holds_only_the_new_run():
         assert index == 10
         text = log.read_run(10, log_dir)
         assert "x" not in text and len(_lines(text)) == 2
-    finally:
-        tmpdir.remove(log_dir)
 
 
 def test_a_runaway_print_loop_is_capped_but_the_framing_still_lands():
-    log_dir = tmpdir.make()
-    try:
+    with tmpdir.scratch() as log_dir:
         with log.session(log_dir, max_bytes=4096) as sess:
             for n in range(1000):
                 log.write("line %d of a runaway loop\n" % n)
@@ -116,8 +100,6 @@ def test_a_runaway_print_loop_is_capped_but_the_framing_still_lands():
         assert "line 999" not in text
         assert _lines(text)[-1].endswith("stopped: KeyboardInterrupt (12 ms after press, 0 retries)")
         assert sess.dropped_bytes > 20000
-    finally:
-        tmpdir.remove(log_dir)
 
 
 def test_outside_a_run_the_log_calls_do_nothing():
@@ -130,11 +112,8 @@ def test_outside_a_run_the_log_calls_do_nothing():
 
 
 def test_missing_log_directory_is_created_and_an_empty_one_lists_no_runs():
-    base = tmpdir.make()
-    try:
+    with tmpdir.scratch() as base:
         log_dir = base + "/openbricks_logs"
         assert log.list_runs(log_dir) == []
         assert _one_run(log_dir, "first\n") == 0
         assert log.list_runs(log_dir) == [(0, log_dir + "/slot_0.log")]
-    finally:
-        tmpdir.remove(base)

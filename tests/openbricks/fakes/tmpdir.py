@@ -33,3 +33,19 @@ def remove(path):
         else:
             os.remove(child)
     os.rmdir(path)
+
+
+class scratch:
+    """`with tmpdir.scratch() as directory:` a fresh directory, removed with its contents on the way out."""
+
+    def __init__(self, prefix="ob"):
+        self.prefix = prefix
+        self.path = None
+
+    def __enter__(self):
+        self.path = make(self.prefix)
+        return self.path
+
+    def __exit__(self, exc_type, exc, tb):
+        remove(self.path)
+        return False
