@@ -10,14 +10,19 @@ interpreter of the tests); using a core there raises an ImportError that says wh
 NAMES = ("motor_process", "Servo", "TrapezoidalProfile", "Observer", "DriveBase", "ImuYaw", "scs")
 
 
+_MISSING = (
+    "the native control cores (_openbricks_native) are not in this MicroPython build: "
+    "flash an openbricks firmware image, or run the program in the openbricks simulator"
+)
+
+
 def _module():
     try:
         import _openbricks_native
     except ImportError:
-        raise ImportError(
-            "the native control cores (_openbricks_native) are not in this MicroPython build: "
-            "flash an openbricks firmware image, or run the program in the openbricks simulator"
-        ) from None
+        raise ImportError(_MISSING) from None
+    if _openbricks_native is None:  # hidden through sys.modules: MicroPython's import returns the None
+        raise ImportError(_MISSING)
     return _openbricks_native
 
 

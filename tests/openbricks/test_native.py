@@ -6,17 +6,19 @@ from fakes.expect import raises
 
 
 def _without_native():
-    """Hide the host build of the cores; a None entry makes CPython's import of it fail, as on a
-    MicroPython build without them (where there is nothing to hide in the first place)."""
+    """Hide the cores (the host build, or the unix MicroPython's built-in module): a None entry in
+    sys.modules makes CPython's import of it fail and MicroPython's return None, as on a build
+    without them."""
     saved = sys.modules.get("_openbricks_native")
-    if saved is not None:
-        sys.modules["_openbricks_native"] = None
+    sys.modules["_openbricks_native"] = None
     return saved
 
 
 def _restore(saved):
     if saved is not None:
         sys.modules["_openbricks_native"] = saved
+    else:
+        del sys.modules["_openbricks_native"]
 
 
 def test_importing_the_module_never_needs_the_cores():
