@@ -19,6 +19,8 @@ import json
 import sys
 import time
 
+from openbricks_sim.limits import DEFAULT_MEMORY_MB
+
 EXIT_OK = 0
 EXIT_FAILED = 1
 WORLD_NAMES = "empty, line_track, zones, arena, wro"  # kept in step with worlds.WORLDS by a test
@@ -33,6 +35,28 @@ VIEWER_UNAVAILABLE = (
     "the 3D viewer is not available in this version yet; run without it (preview: --headless), or use "
     "--json and plot the result"
 )
+
+
+def seed_argument(text):
+    """--seed: a whole number from 0 up (what the worlds' random generators accept)."""
+    try:
+        seed = int(text)
+    except ValueError:
+        seed = -1
+    if seed < 0:
+        raise argparse.ArgumentTypeError(f"{text!r}: give a whole number from 0 up")
+    return seed
+
+
+def limit_argument(text):
+    """A limit in seconds or MB: a number from 0 up, 0 meaning no limit."""
+    try:
+        value = float(text)
+    except ValueError:
+        value = -1.0
+    if not value >= 0:
+        raise argparse.ArgumentTypeError(f"{text!r}: give a number from 0 up (0: no limit)")
+    return value
 
 
 class SimCliError(Exception):
@@ -55,7 +79,7 @@ def _start_options(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument(
         "--seed",
-        type=int,
+        type=seed_argument,
         default=0,
         help="Seed of the world's random layout (props, noise); one seed always gives one run. Default: 0.",
     )
@@ -118,10 +142,28 @@ def build_parser() -> argparse.ArgumentParser:
     )
     run.add_argument(
         "--wall-limit",
-        type=float,
+        type=limit_argument,
         default=None,
         metavar="SECONDS",
-        help="Wall-clock seconds a run may take while simulated time stands still (a loop that never waits).",
+        help=(
+            "Wall-clock seconds the run may take, 0 for no limit (it stops a loop that never lets "
+            "simulated time pass). Default: --duration (twice --duration / --speed when paced), at "
+            "least 10; none with --viewer."
+        ),
+    )
+    run.add_argument(
+        "--cpu-limit",
+        type=limit_argument,
+        default=None,
+        metavar="SECONDS",
+        help="Processor seconds the run's process may use, 0 for no limit. Default: the wall limit + 5.",
+    )
+    run.add_argument(
+        "--memory-mb",
+        type=int,
+        default=DEFAULT_MEMORY_MB,
+        metavar="MB",
+        help="Memory (address space) of the run's process, 0 for no limit. Default: %(default)s.",
     )
     run.add_argument(
         "--json",
@@ -269,82 +311,62 @@ def _run(args) -> int:
         prepare_hub_dir(args.hub_dir)
     except HubDirError as exc:
         raise SimCliError(str(exc)) from None
+    return _run_contained(args, world, script)
+
+
+def _run_contained(args, world, script) -> int:
+    """The program runs in a child process under limits (run_process.py); this process waits, passes
+    Ctrl-C on, and prints the JSON summary for --json (the child prints text reports itself)."""
+    from openbricks_sim.limits import default_cpu_s, default_wall_s
+    from openbricks_sim.run_process import run_in_child
+
+    limit_ms = int(round(args.duration * 1000))
+    wall_s = args.wall_limit
+    if wall_s is None:
+        wall_s = 0 if args.viewer else default_wall_s(limit_ms, args.speed)
+    cpu_s = args.cpu_limit
+    if cpu_s is None:
+        cpu_s = default_cpu_s(wall_s) or 0
+    child_args = [
+        str(script),
+        "--world",
+        args.world,
+        "--chassis",
+        args.chassis,
+        "--seed",
+        str(args.seed),
+        "--limit-ms",
+        str(limit_ms),
+        "--wall-limit-s",
+        repr(float(wall_s)),
+        "--cpu-limit-s",
+        repr(float(cpu_s)),
+        "--memory-mb",
+        str(args.memory_mb),
+        "--range-finder",
+        args.range_finder,
+    ]
+    start = _start_pose(args, world)
+    if start is not None:
+        child_args += ["--start", *(repr(float(v)) for v in start)]
+    if args.speed is not None:
+        child_args += ["--speed", repr(float(args.speed))]
+    if args.hub_dir is not None:
+        child_args += ["--hub-dir", args.hub_dir]
+    if args.bare_0x29 is not None:
+        child_args += ["--bare-0x29", args.bare_0x29]
     if args.viewer:
-        return _run_with_viewer(args, world, script, source)
-    from openbricks_sim.run import FINISHED, TIME_LIMIT, run_program
-
-    result = run_program(
-        str(script),
-        world=args.world,
-        chassis=args.chassis,
-        seed=args.seed,
-        start_mm_deg=_start_pose(args, world),
-        speed=args.speed,
-        limit_ms=int(round(args.duration * 1000)),
-        wall_limit_s=args.wall_limit,
-        echo=None if args.json else _echo_to(sys.stdout),
-        source=source,
-        hub_dir=args.hub_dir,
-        range_finder=args.range_finder,
-        bare_0x29=args.bare_0x29,
-    )
+        child_args.append("--viewer")
+    if args.json:
+        child_args.append("--json")
+    result, status = run_in_child(child_args, wall_limit_s=wall_s or None, cpu_limit_s=cpu_s or None)
     if args.json:
         print(json.dumps(_summary(result)))
-    else:
-        _report(result)
-    return EXIT_OK if result.exit in (FINISHED, TIME_LIMIT) else EXIT_FAILED
+    elif not result.job:  # the child died without reporting: say why here
+        from openbricks_sim.run import report
 
-
-def _report(result) -> None:
-    """How the run ended, on stderr (stdout carries the program's own output)."""
-    if result.error:
-        sys.stderr.write(result.error if result.error.endswith("\n") else result.error + "\n")
-    pose = result.pose
-    print(
-        f"[{result.exit}] {result.sim_ms / 1000:.3f} s simulated in {result.wall_s:.2f} s "
-        f"({result.real_time_factor}x real time); robot at x={pose['x_mm']:.1f} mm "
-        f"y={pose['y_mm']:.1f} mm heading={pose['heading_deg']:.2f} deg",
-        file=sys.stderr,
-    )
-    if result.score is not None:
-        print(f"score: {json.dumps(result.score)}", file=sys.stderr)
-
-
-def _run_with_viewer(args, world, script, source) -> int:
-    """--viewer: the run in the browser's 3D view, paced at --speed (real time unless given); the page
-    can pause, change speed, stop and restart it; Ctrl-C ends the session."""
-    from openbricks_sim.run import FINISHED, TIME_LIMIT
-    from openbricks_sim.viewer import print_url, serve_run
-
-    result = serve_run(
-        str(script),
-        world=args.world,
-        chassis=args.chassis,
-        seed=args.seed,
-        start_mm_deg=_start_pose(args, world),
-        speed=1.0 if args.speed is None else args.speed,
-        limit_ms=int(round(args.duration * 1000)),
-        echo=None if args.json else _echo_to(sys.stdout),
-        source=source,
-        on_ready=print_url,
-        on_result=None if args.json else _report,
-        hub_dir=args.hub_dir,
-        range_finder=args.range_finder,
-        bare_0x29=args.bare_0x29,
-    )
-    if args.json:
-        print(json.dumps(_summary(result)))
-    return EXIT_OK if result.exit in (FINISHED, TIME_LIMIT) else EXIT_FAILED
-
-
-def _echo_to(stream):
-    """Live output to `stream`, bound now: during the run sys.stdout is the run's own collector."""
-
-    def echo(text: str) -> None:
-        stream.write(text)
-        stream.flush()
-
-    return echo
+        report(result)
+    return status
 
 
 def _summary(result) -> dict:

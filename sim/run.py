@@ -1,4 +1,4 @@
-"""Run a hub program against a simulated robot, in this process, and report what happened.
+"""Run a hub program against a simulated robot and report what happened.
 
     result = run_program("square.py", world="empty", chassis="st3032", limit_ms=60_000)
     print(result.exit, result.pose, result.output)
@@ -11,10 +11,11 @@ it returns, raises, calls sys.exit() or machine.reset(), reaches the
 simulated time limit, exceeds the wall-clock limit (a loop that never lets
 time pass), or is stopped from another thread (request_stop()).
 
-The shim patches process-wide state (sys.modules, stdout), so run programs
-in a process of their own: `python -m openbricks_sim.run PROGRAM --json`
-does exactly that and prints the result as JSON; the CLI and the virtual hub
-build on these two entry points.
+The shim patches process-wide state (sys.modules, stdout), and user code must
+never run in the CLI's process, so programs run in a process of their own:
+`python -m openbricks_sim.run PROGRAM --json` does exactly that, fenced in
+by limits.contain() (memory, CPU time, file size, no new processes), and
+prints the result as JSON; `openbricks sim run` starts it (run_process.py).
 """
 
 import _thread
@@ -22,14 +23,17 @@ import argparse
 import io
 import json
 import os
+import signal
 import sys
 import threading
 import time
 import traceback
 from dataclasses import asdict, dataclass, field
 
+from . import limits
+from .cli import limit_argument, seed_argument
 from .clock import SimStopped, SimTimeLimit
-from .limits import DEFAULT_MEMORY_MB, limit_memory
+from .limits import DEFAULT_MEMORY_MB, CpuLimitExceeded, contain, default_cpu_s, default_wall_s
 from .run_flash import HubDirError, RunFlash, prepare_hub_dir
 from .sensors.rig import BARE_0X29, RANGE_FINDERS
 from .shim import Shim
@@ -39,10 +43,27 @@ from .worlds import final_state
 FINISHED = "finished"  # the program returned (or called sys.exit())
 ERROR = "error"  # it raised
 TIME_LIMIT = "time_limit"  # simulated time ran out
-WALL_LIMIT = "wall_limit"  # it ran too long on the wall clock without letting simulated time pass
+WALL_LIMIT = "wall_limit"  # it ran too long on the wall clock (a loop that never lets time pass)
+CPU_LIMIT = "cpu_limit"  # it used up the processor time of its process
+MEMORY_LIMIT = "memory_limit"  # it ran out of the memory of its process
 STOPPED = "stopped"  # stopped from outside (Ctrl-C, a stopped job)
 RESET = "reset"  # machine.reset()
 BARE_PARTS = tuple(part for part in BARE_0X29 if part is not None)  # --bare-0x29 choices
+
+# The exit status of a run, by its exit reason: 0 it finished or used its simulated time, 1 it
+# raised (or reset the hub), 3 a limit of its process stopped it, 130 it was interrupted.
+EXIT_LIMIT = 3
+EXIT_STOPPED = 130
+EXIT_STATUS = {
+    FINISHED: 0,
+    TIME_LIMIT: 0,
+    ERROR: 1,
+    RESET: 1,
+    WALL_LIMIT: EXIT_LIMIT,
+    CPU_LIMIT: EXIT_LIMIT,
+    MEMORY_LIMIT: EXIT_LIMIT,
+    STOPPED: EXIT_STOPPED,
+}
 
 
 @dataclass
@@ -120,6 +141,11 @@ class ProgramRun:
                     exit_reason = STOPPED
                 except KeyboardInterrupt:
                     exit_reason = WALL_LIMIT if self._wall_expired else STOPPED
+                except CpuLimitExceeded:
+                    exit_reason = CPU_LIMIT
+                except MemoryError as exc:
+                    exit_reason = MEMORY_LIMIT
+                    error = "".join(traceback.format_exception(type(exc), exc, exc.__traceback__))
                 except SystemExit:
                     exit_reason = RESET if sim.board.reset_requested else FINISHED
                 except BaseException as exc:  # noqa: BLE001 - whatever the program raised is its result
@@ -132,12 +158,8 @@ class ProgramRun:
         finally:
             sys.stdout, sys.stderr = saved_streams
         wall_s = time.perf_counter() - started
-        if exit_reason == WALL_LIMIT:
-            error = (
-                f"the program ran {wall_limit_s:g} s of wall-clock time while simulated time stood at "
-                f"{sim.clock.now_ms()} ms: a loop that never sleeps, waits on a device or reads the clock "
-                "keeps simulated time from passing (add time.sleep_ms() to the loop)"
-            )
+        if exit_reason in LIMIT_MESSAGES:
+            error = (error or "") + LIMIT_MESSAGES[exit_reason](wall_limit_s, sim.clock.now_ms()) + "\n"
         pose = sim.physics.pose()
         sim_ms = sim.clock.now_ms()
         scoring = sim.physics.world.score
@@ -158,6 +180,60 @@ class ProgramRun:
     def _wall_limit_reached(self):
         self._wall_expired = True
         _thread.interrupt_main()
+
+
+def _wall_limit_message(wall_limit_s, sim_ms):
+    return (
+        f"wall-clock limit: the program ran {wall_limit_s:g} s of wall-clock time (--wall-limit) and "
+        f"simulated time reached only {sim_ms} ms: a loop that never sleeps, waits on a device or reads "
+        "the clock keeps simulated time from passing (add time.sleep_ms() to the loop)"
+    )
+
+
+def _cpu_limit_message(_wall_limit_s, sim_ms):
+    cpu_s = limits.applied.get("cpu_s")
+    return (
+        f"CPU-time limit: the run's process used its {cpu_s or 0:g} s of processor time (--cpu-limit) at "
+        f"{sim_ms} ms of simulated time: a loop that never lets simulated time pass, or a very long run "
+        "(raise --cpu-limit)"
+    )
+
+
+def _memory_limit_message(_wall_limit_s, _sim_ms):
+    memory_mb = limits.applied.get("memory_mb")
+    size = f"its {memory_mb} MB of" if memory_mb else "its"
+    return (
+        f"memory limit: the program ran out of {size} memory (--memory-mb); a hub has far less, so "
+        "look for a list or buffer that keeps growing"
+    )
+
+
+LIMIT_MESSAGES = {
+    WALL_LIMIT: _wall_limit_message,
+    CPU_LIMIT: _cpu_limit_message,
+    MEMORY_LIMIT: _memory_limit_message,
+}
+
+
+def report(result, stream=None) -> None:
+    """How the run ended, for a person: the error (if any), then one summary line, on `stream`
+    (stderr by default: stdout carries the program's own output)."""
+    stream = sys.stderr if stream is None else stream
+    if result.error:
+        stream.write(result.error if result.error.endswith("\n") else result.error + "\n")
+    line = f"[{result.exit}] {result.sim_ms / 1000:.3f} s simulated in {result.wall_s:.2f} s"
+    if result.real_time_factor is not None:
+        line += f" ({result.real_time_factor}x real time)"
+    pose = result.pose
+    if pose:
+        line += (
+            f"; robot at x={pose['x_mm']:.1f} mm y={pose['y_mm']:.1f} mm "
+            f"heading={pose['heading_deg']:.2f} deg"
+        )
+    stream.write(line + "\n")
+    if result.score is not None:
+        stream.write(f"score: {json.dumps(result.score)}\n")
+    stream.flush()
 
 
 def run_program(
@@ -238,18 +314,28 @@ def _peak_rss_mb():
 
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(
-        prog="python -m openbricks_sim.run", description="Run a hub program in the simulator."
+        prog="python -m openbricks_sim.run",
+        description="Run a hub program in the simulator, in this process, fenced in by limits.",
     )
     parser.add_argument("program", help="the program file, as you would run it on the hub")
     parser.add_argument("--world", default="empty", help="world alias or MJCF file (default: empty)")
     parser.add_argument("--chassis", default="st3032", help="st3032 or jgb37 (default: st3032)")
-    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--seed", type=seed_argument, default=0)
     parser.add_argument("--start", type=float, nargs=3, metavar=("X_MM", "Y_MM", "HEADING_DEG"))
     parser.add_argument(
         "--speed", type=float, help="pace to wall time x SPEED (default: as fast as possible)"
     )
     parser.add_argument("--limit-ms", type=int, default=60_000, help="simulated time limit (default: 60000)")
-    parser.add_argument("--wall-limit-s", type=float, default=None, help="wall-clock limit")
+    parser.add_argument(
+        "--wall-limit-s",
+        type=limit_argument,
+        help="wall-clock limit of the run, 0 for none (default: from --limit-ms and --speed)",
+    )
+    parser.add_argument(
+        "--cpu-limit-s",
+        type=limit_argument,
+        help="processor-time limit of this process, 0 for none (default: the wall limit + 5 s)",
+    )
     parser.add_argument(
         "--hub-dir",
         help="the hub's flash: a directory whose files the program sees at the hub's root, and keeps "
@@ -273,42 +359,77 @@ def main(argv=None) -> int:
         default=DEFAULT_MEMORY_MB,
         help=f"address-space limit of this run's process, 0 for none (default: {DEFAULT_MEMORY_MB})",
     )
+    parser.add_argument(
+        "--viewer",
+        action="store_true",
+        help="serve the 3D view and run until interrupted (no wall-clock or CPU limit by default)",
+    )
     parser.add_argument("--json", action="store_true", help="print the result as one JSON object")
+    parser.add_argument(
+        "--result-fd", type=int, help="write the JSON result to this file descriptor instead of stdout"
+    )
     args = parser.parse_args(argv)
-    limit_memory(args.memory_mb)
-    stdout = sys.stdout
-    echo = None if args.json else stdout.write
     try:
         prepare_hub_dir(args.hub_dir)
     except HubDirError as exc:
         parser.error(str(exc))
-    result = run_program(
-        args.program,
-        args.world,
-        args.chassis,
-        args.seed,
-        tuple(args.start) if args.start else None,
-        args.speed,
-        args.limit_ms,
-        args.wall_limit_s,
-        echo,
+    result_out = os.fdopen(args.result_fd, "w", encoding="utf-8") if args.result_fd is not None else None
+    wall_s = args.wall_limit_s
+    if wall_s is None:
+        wall_s = None if args.viewer else default_wall_s(args.limit_ms, args.speed)
+    cpu_s = args.cpu_limit_s
+    if cpu_s is None:
+        cpu_s = default_cpu_s(wall_s)
+    contain(memory_mb=args.memory_mb, cpu_s=cpu_s)
+    # Ctrl-C reaches us as the CLI's forwarded SIGINT: a KeyboardInterrupt, even when this process
+    # was started with SIGINT ignored (a background job of a script).
+    signal.signal(signal.SIGINT, signal.default_int_handler)
+    stdout = sys.stdout
+    echo = None if args.json else _echo_to(stdout)
+    options = dict(
+        world=args.world,
+        chassis=args.chassis,
+        seed=args.seed,
+        start_mm_deg=tuple(args.start) if args.start else None,
+        speed=args.speed,
+        limit_ms=args.limit_ms,
+        echo=echo,
         hub_dir=args.hub_dir,
         range_finder=args.range_finder,
         bare_0x29=args.bare_0x29,
     )
-    if args.json:
-        stdout.write(result.to_json() + "\n")
-    else:
-        if result.error:
-            stdout.write(result.error)
-        stdout.write(
-            f"[{result.exit}] {result.sim_ms} ms simulated in {result.wall_s:.2f} s "
-            f"({result.real_time_factor}x); pose x={result.pose['x_mm']:.1f} mm "
-            f"y={result.pose['y_mm']:.1f} mm heading={result.pose['heading_deg']:.2f} deg\n"
+    on_result = None if args.json else report
+    if args.viewer:
+        from .viewer import print_url, serve_run
+
+        result = serve_run(
+            args.program,
+            **{**options, "speed": 1.0 if args.speed is None else args.speed},
+            on_ready=print_url,
+            on_result=on_result,
         )
-        if result.score is not None:
-            stdout.write(f"score: {json.dumps(result.score)}\n")
-    return 0 if result.exit in (FINISHED, TIME_LIMIT) else 1
+    else:
+        result = run_program(args.program, wall_limit_s=wall_s or None, **options)
+        if on_result is not None:
+            on_result(result)
+    signal.signal(signal.SIGXCPU, signal.SIG_IGN)  # the result is out: only the hard limit remains
+    result.job["limits"] = {"wall_s": wall_s or None, "cpu_s": cpu_s or None, "memory_mb": args.memory_mb}
+    if result_out is not None:
+        with result_out:
+            result_out.write(result.to_json() + "\n")
+    elif args.json:
+        stdout.write(result.to_json() + "\n")
+    return EXIT_STATUS[result.exit]
+
+
+def _echo_to(stream):
+    """Live output to `stream`, bound now: during the run sys.stdout is the run's own collector."""
+
+    def echo(text):
+        stream.write(text)
+        stream.flush()
+
+    return echo
 
 
 if __name__ == "__main__":

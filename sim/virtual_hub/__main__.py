@@ -18,7 +18,7 @@ import signal
 import sys
 import threading
 
-from ..limits import DEFAULT_MEMORY_MB, limit_memory
+from ..limits import DEFAULT_MEMORY_MB, contain
 from . import endpoint
 from .control import SOCKET_NAME, ControlServer
 from .hub import HubBusyError, HubConfig, VirtualHub
@@ -127,7 +127,7 @@ def main(argv=None):
         return 2
     control = ControlServer(hub, os.path.join(directory, SOCKET_NAME)).start()
     hub.control_path = control.path
-    limit_memory(args.memory_mb)
+    contain(memory_mb=args.memory_mb)
 
     def ready():
         pty = port.path if args.pty else None

@@ -7,7 +7,7 @@ import sys
 
 import pytest
 
-from openbricks_sim.run import ERROR, FINISHED, STOPPED, TIME_LIMIT, WALL_LIMIT, run_program
+from openbricks_sim.run import ERROR, FINISHED, MEMORY_LIMIT, STOPPED, TIME_LIMIT, WALL_LIMIT, run_program
 
 DRIVE_FORWARD = """\
 import time
@@ -130,5 +130,6 @@ def test_a_run_process_caps_its_memory_and_a_hog_ends_in_its_own_memory_error(tm
     program.write_text("blocks = []\nwhile True:\n    blocks.append(bytearray(50 * 1024 * 1024))\n")
     out = run_in_own_process(program, "--memory-mb", "400", cwd=tmp_path)
     result = json.loads(out.stdout)
-    assert result["exit"] == ERROR
-    assert result["error"].rstrip().endswith("MemoryError")
+    assert result["exit"] == MEMORY_LIMIT and out.returncode == 3
+    assert "MemoryError" in result["error"]
+    assert "memory limit: the program ran out of its 400 MB of memory (--memory-mb)" in result["error"]

@@ -1,0 +1,138 @@
+"""`openbricks sim run`'s side of a run: the program runs in a child process, never in the CLI's.
+
+    result, status = run_in_child(["square.py", "--world", "wro", "--json"], wall_limit_s=60)
+
+The child is `python -m openbricks_sim.run` (run.py), which fences itself in (limits.contain:
+memory, CPU time, file size, no new processes), runs the program, prints its output and report
+on the terminal it shares with us, and sends its RunResult as JSON over a pipe. This side:
+
+- starts it in a session of its own with no stdin, so the terminal's Ctrl-C (and a SIGTERM or
+  SIGHUP to the CLI) reaches only the CLI, which passes exactly one interrupt on: the program
+  stops, the child still reports how far it got; a second Ctrl-C kills the child;
+- backs up the child's own wall-clock limit: a child still alive GRACE_S after it is killed,
+  whatever the program did to its signals;
+- turns a child that died without a result (the CPU limit's SIGKILL, a crash) into a result
+  with one line saying why.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import threading
+import time
+
+from .run import CPU_LIMIT, ERROR, EXIT_STATUS, STOPPED, WALL_LIMIT, RunResult
+
+GRACE_S = 10.0  # start-up (imports, the world's build) plus the child's own wall-limit handling
+FORWARDED_SIGNALS = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
+# `python -m openbricks_sim.run`, except that a Ctrl-C while the simulator still imports ends the
+# child quietly instead of with a traceback of numpy's start-up.
+CHILD_MAIN = (
+    "import sys\n"
+    "try:\n"
+    "    from openbricks_sim.run import main\n"
+    "except KeyboardInterrupt:\n"
+    "    sys.exit(130)\n"
+    "sys.exit(main(sys.argv[1:]))\n"
+)
+
+
+def run_in_child(child_args, wall_limit_s=None, cpu_limit_s=None) -> tuple[RunResult, int]:
+    """Run `python -m openbricks_sim.run CHILD_ARGS --result-fd N`; (its RunResult, exit status).
+
+    wall_limit_s / cpu_limit_s: the limits the child was given (None: none), for the backstop and
+    for naming what killed a child that left no result.
+    """
+    interrupts = []
+    children = []
+
+    def interrupt(signum, _frame):
+        interrupts.append(signum)
+        for child in children:
+            if child.poll() is None:
+                child.send_signal(signal.SIGINT) if len(interrupts) == 1 else child.kill()
+
+    # Installed before the child starts: it then begins with SIGINT at its default (a Python handler
+    # is reset by exec, an ignored signal would stay ignored) and sees the interrupt we pass on.
+    previous = {signum: signal.signal(signum, interrupt) for signum in FORWARDED_SIGNALS}
+    read_end, write_end = os.pipe()
+    sys.stdout.flush()
+    sys.stderr.flush()
+    started = time.monotonic()
+    killed_for_time = False
+    try:
+        try:
+            child = subprocess.Popen(
+                [sys.executable, "-c", CHILD_MAIN, *child_args, "--result-fd", str(write_end)],
+                stdin=subprocess.DEVNULL,
+                pass_fds=(write_end,),
+                start_new_session=True,
+            )
+        finally:
+            os.close(write_end)
+        children.append(child)
+        if interrupts:
+            child.send_signal(signal.SIGINT)
+        chunks = []
+        reader = threading.Thread(target=_read_all, args=(read_end, chunks), daemon=True)
+        reader.start()
+        deadline = None if not wall_limit_s else wall_limit_s + GRACE_S
+        try:
+            child.wait(timeout=deadline)
+        except subprocess.TimeoutExpired:
+            killed_for_time = True
+            child.kill()
+            child.wait()
+    finally:
+        for signum, handler in previous.items():
+            signal.signal(signum, handler)
+    reader.join(timeout=5)
+    wall_s = round(time.monotonic() - started, 4)
+    text = b"".join(chunks).decode("utf-8", "replace").strip()
+    if text:
+        result = RunResult(**json.loads(text))
+    else:
+        result = _lost_result(
+            child.returncode, wall_s, killed_for_time, bool(interrupts), wall_limit_s, cpu_limit_s
+        )
+    if interrupts and result.exit == STOPPED:
+        return result, EXIT_STATUS[STOPPED]
+    return result, EXIT_STATUS.get(result.exit, 1)
+
+
+def _read_all(fd, chunks):
+    with os.fdopen(fd, "rb") as pipe:
+        while True:
+            chunk = pipe.read(65536)
+            if not chunk:
+                return
+            chunks.append(chunk)
+
+
+def _lost_result(returncode, wall_s, killed_for_time, interrupted, wall_limit_s, cpu_limit_s):
+    """The result of a child that ended without sending one: what ended it, in one line."""
+    if killed_for_time:
+        exit_reason = WALL_LIMIT
+        error = (
+            f"wall-clock limit: the program was still running {wall_limit_s:g} s (--wall-limit) plus "
+            f"{GRACE_S:g} s of grace after it should have stopped, and its process was killed: a loop "
+            "that never sleeps and catches every interrupt"
+        )
+    elif returncode in (-signal.SIGKILL, -signal.SIGXCPU) and cpu_limit_s and not interrupted:
+        exit_reason = CPU_LIMIT
+        error = (
+            f"CPU-time limit: the run's process used its {cpu_limit_s:g} s of processor time "
+            "(--cpu-limit) and was killed: a loop that never lets simulated time pass, or a very long run"
+        )
+    elif interrupted:
+        exit_reason = STOPPED
+        error = "stopped: the run's process ended before it could report"
+    else:
+        exit_reason = ERROR
+        how = f"was killed by signal {-returncode}" if returncode < 0 else f"exited with status {returncode}"
+        error = f"the simulator's process {how} without a result (its messages are above)"
+    return RunResult(exit=exit_reason, sim_ms=0, wall_s=wall_s, pose={}, output="", error=error)
