@@ -12,6 +12,14 @@ import pytest
 
 BUSY_LOOP = "print('spinning', end='')\nwhile True:\n    pass\n"
 MEMORY_BOMB = "blocks = []\nwhile True:\n    blocks.append(bytearray(50 * 1024 * 1024))\n"
+STUBBORN_LOOP = """\
+while True:
+    try:
+        while True:
+            pass
+    except BaseException:
+        pass
+"""
 SLEEPY_LOOP = "import time\nprint('started')\nwhile True:\n    time.sleep_ms(10)\n"
 
 
@@ -95,8 +103,8 @@ def test_ctrl_c_stops_the_program_and_exits_130_with_the_report(tmp_path):
 
 @pytest.mark.e2e
 def test_a_busy_loop_that_swallows_interrupts_still_ends(tmp_path):
-    stubborn = "while True:\n    try:\n        while True:\n            pass\n    except BaseException:\n        pass\n"
-    done, took = sim_run(write(tmp_path, "stubborn.py", stubborn), "--wall-limit", "1", "--cpu-limit", "3")
+    program = write(tmp_path, "stubborn.py", STUBBORN_LOOP)
+    done, took = sim_run(program, "--wall-limit", "1", "--cpu-limit", "3")
     assert done.returncode == 3, done.stderr
     assert "CPU-time limit" in done.stderr and "--cpu-limit" in done.stderr
     assert took < 30
