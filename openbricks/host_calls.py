@@ -1,9 +1,14 @@
 """The hub side of every host operation, called over the raw REPL with data, never with generated code.
 
-The host sends one short line such as `import openbricks.host_calls as h; h.info()` and reads back
-exactly one result line: RESULT_MARKER followed by a JSON object with `"ok": true` and the data, or
-`"ok": false` with `"error"` (what went wrong and how to fix it) and `"type"` (the exception class).
-Program output printed before the result line (by `run`) is the program's own, streamed as it runs.
+The host sends one short line such as `import openbricks.host_calls as h;h.tag('9f2c41d0');h.info()`
+and reads back one result frame: `@openbricks:<tag> result <json>`, a JSON object with `"ok": true`
+and the data, or `"ok": false` with `"error"` (what went wrong and how to fix it) and `"type"` (the
+exception class). The tag is a fresh nonce the host picks for every call, so output a program
+prints can neither be taken for a frame nor hide one, whatever it prints (no newline at the end,
+text that looks like a frame). `run` frames the program's output too: `@openbricks:<tag> program`
+before it, the result frame after it, so the host knows that bytes in between (a Ctrl-D included)
+are the program's. A frame is written whole even if a Ctrl-C lands meanwhile (it is written again
+and the interrupt raised after it), so a stop never cuts the result short.
 
 Calls: info, set_rtc, stage, stage_begin / stage_append / stage_end, read_file, run, runs, read_run,
 idle, reset, paste_probe, record_provenance, set_hub_name, servo_scan, servo_set_id. Binary payloads
@@ -24,8 +29,8 @@ import machine
 import openbricks
 from openbricks import launcher, log, pins
 
-RESULT_MARKER = "@openbricks-result "
-PROTOCOL = 1
+FRAME_PREFIX = "@openbricks:"
+PROTOCOL = 2  # 2: tagged frames (tag(), "program" and "result" frames)
 MAX_PROGRAM_BYTES = 256 * 1024  # staged program ceiling (bytes after decompression)
 SERVO_UART_ID = 1
 SERVO_TX = 14
@@ -44,10 +49,34 @@ _INST_PING = 0x01
 _EPOCH_2000_MS = 946684800000
 
 _staging = {}  # the chunked upload in progress: path, part, file, received
+_tag = ["-"]  # the host's nonce for the frames of the call now running
+
+
+def tag(nonce):
+    """Take the host's nonce for the frames of the call that follows on the same command line."""
+    _tag[0] = str(nonce)
+
+
+def _frame(kind, payload=""):
+    """Write one frame whole; returns the KeyboardInterrupt that landed meanwhile (or None).
+
+    An interrupted write is written again, marked "again": the host then drops what the cut one
+    left (it cannot tell a cut frame's first bytes from program output otherwise).
+    """
+    body = kind + (" " + payload if payload else "") + "\n"
+    interrupted = None
+    while True:
+        try:
+            print(FRAME_PREFIX + _tag[0] + (" again " if interrupted else " ") + body, end="")
+            return interrupted
+        except KeyboardInterrupt as exc:
+            interrupted = exc
 
 
 def _reply(result):
-    print(RESULT_MARKER + json.dumps(result))
+    interrupted = _frame("result", json.dumps(result))
+    if interrupted is not None:
+        raise interrupted
     return result
 
 
@@ -323,20 +352,39 @@ def read_file(path, offset=0, size=READ_FILE_MAX_BYTES):
 
 
 def run(path=None):
-    """Run the staged program through the launcher; its output streams first, then the result line.
+    """Run the staged program through the launcher between a program frame and the result frame.
 
-    A stop (program button or Ctrl-C) prints the result and then propagates KeyboardInterrupt, as any
-    interrupted raw-REPL command does.
+    Whatever ends the run, the result frame follows: a stop (program button or Ctrl-C, even one
+    that lands while the run is being wrapped up) prints it and then propagates KeyboardInterrupt,
+    as any interrupted raw-REPL command does.
     """
-    hub = launcher.get()
+    interrupted = None
+    result = None
+    before = None  # the newest run log before this run: a newer one is this run's
     try:
-        outcome = hub.run_program("host run", path)
-    except KeyboardInterrupt:
-        _reply({"ok": True, "outcome": "stopped", "run": _last_run(hub.log_dir)})
-        raise
+        hub = launcher.get()
+        before = _last_run(hub.log_dir)
+        interrupted = _frame("program")
+        if interrupted is None:
+            result = {"ok": True, "outcome": hub.run_program("host run", path)}
+    except KeyboardInterrupt as exc:
+        interrupted = exc
     except Exception as exc:  # noqa: BLE001 - e.g. nothing staged: the host gets the reason
-        return _reply({"ok": False, "type": type(exc).__name__, "error": str(exc)})
-    return _reply({"ok": True, "outcome": outcome, "run": _last_run(hub.log_dir)})
+        result = {"ok": False, "type": type(exc).__name__, "error": str(exc)}
+    if result is None:
+        result = {"ok": True, "outcome": "stopped"}
+    while result["ok"]:
+        try:
+            newest = _last_run(launcher.get().log_dir)
+            result["run"] = newest if newest != before else None
+            break
+        except KeyboardInterrupt as exc:
+            interrupted = exc
+    late = _frame("result", json.dumps(result))
+    interrupted = interrupted or late
+    if interrupted is not None:
+        raise interrupted
+    return result
 
 
 def _last_run(log_dir):

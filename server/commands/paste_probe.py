@@ -15,17 +15,17 @@ import time
 from openbricks_server.errors import EXIT_FAILED, EXIT_OK, CliError
 from openbricks_server.hub_session import hub_exception_message, with_hub
 from openbricks_server.link import HubException, LinkTimeout
-from openbricks_server.link.host_call import call_source
+from openbricks_server.link.host_call import Command, command
 
 FIRST_SIZE = 256
 
 
-def probe_command(size: int, token: str) -> tuple[bytes, int]:
+def probe_command(size: int, token: str) -> tuple[Command, int]:
     """The `paste_probe` call that is exactly `size` bytes (when larger than the bare call), and how
     many padding bytes it carries."""
-    bare = len(call_source("paste_probe", {"token": token, "padding": ""}))
+    bare = len(command(("paste_probe", {"token": token, "padding": ""})).source)
     padding = max(size - bare, 0)
-    return call_source("paste_probe", {"token": token, "padding": "." * padding}).encode(), padding
+    return command(("paste_probe", {"token": token, "padding": "." * padding})), padding
 
 
 def sizes(max_bytes: int) -> list[int]:
@@ -41,10 +41,10 @@ async def _probe(session, max_bytes: int, timeout_s: float):
     results = []
     for size in sizes(max_bytes):
         token = f"paste-probe-{size}"
-        command, padding = probe_command(size, token)
+        probe, padding = probe_command(size, token)
         started = time.perf_counter()
         try:
-            result = await repl.exec(command, timeout_s=timeout_s)
+            result = await repl.exec(probe, timeout_s=timeout_s)
             reply = result.results[-1] if result.results else {}
             ok = reply.get("token") == token and reply.get("padding_bytes") == padding
             if ok:
@@ -60,9 +60,9 @@ async def _probe(session, max_bytes: int, timeout_s: float):
         except LinkTimeout:
             ok, verdict = False, f"hung (no answer within {timeout_s:g} s)"
         elapsed = time.perf_counter() - started
-        rate = f"{len(command) / elapsed / 1024:7.1f} KB/s" if ok and elapsed > 0 else ""
-        print(f"{len(command):>7} bytes  {verdict:<12} {rate}".rstrip(), flush=True)
-        results.append((len(command), ok))
+        rate = f"{len(probe.source) / elapsed / 1024:7.1f} KB/s" if ok and elapsed > 0 else ""
+        print(f"{len(probe.source):>7} bytes  {verdict:<12} {rate}".rstrip(), flush=True)
+        results.append((len(probe.source), ok))
         if not ok:
             await repl.enter(timeout_s=timeout_s)
     window = repl.paste_window

@@ -182,6 +182,13 @@ class Link:
         del self._rx[:n]
         return data
 
+    def unread(self, data: bytes) -> None:
+        """Put bytes a reader took but does not own back in front of the buffer (the next read
+        gets them first): a parser that read past the end of its part hands the rest on."""
+        if data:
+            self._rx[:0] = data
+            self._rx_ready.set()
+
     async def _wait_for_data(self, what: str, deadline: float, timeout_s: float) -> None:
         while not self._rx:
             self._check_usable(f"waiting for {what}")

@@ -14,7 +14,7 @@ import zlib
 from typing import TYPE_CHECKING
 
 from openbricks_server.link.errors import LinkDropped, ProtocolError
-from openbricks_server.link.host_call import call_source, check_reply
+from openbricks_server.link.host_call import Command, check_reply, command
 
 if TYPE_CHECKING:
     from openbricks_server.link.raw_repl import RawRepl
@@ -50,7 +50,7 @@ def _payload(data: bytes, compress: bool) -> tuple[str, str | None]:
 
 def _stage_commands(
     path: str, text: str, compression: str | None, size: int, crc: int, chars: int
-) -> list[str]:
+) -> list[Command]:
     """One `stage` call when the text fits `chars`, else begin + first chunk, middle chunks, last
     chunk + end: each command stays within the hub's RAM budget and no command waits for another."""
     if len(text) <= chars:
@@ -62,17 +62,17 @@ def _stage_commands(
             "size": size,
             "crc32": crc,
         }
-        return [call_source("stage", data)]
+        return [command(("stage", data))]
     chunks = [text[i : i + chars] for i in range(0, len(text), chars)]
     commands = []
     for index, chunk in enumerate(chunks):
-        parts = []
+        calls = []
         if index == 0:
-            parts.append(call_source("stage_begin", {"path": path}))
-        parts.append(call_source("stage_append", {"payload": chunk}))
+            calls.append(("stage_begin", {"path": path}))
+        calls.append(("stage_append", {"payload": chunk}))
         if index == len(chunks) - 1:
-            parts.append(call_source("stage_end", {"compression": compression, "size": size, "crc32": crc}))
-        commands.append("\n".join(parts))
+            calls.append(("stage_end", {"compression": compression, "size": size, "crc32": crc}))
+        commands.append(command(*calls))
     return commands
 
 
@@ -137,7 +137,7 @@ async def get(
     # The hub may cap a slice below what was asked: its first slice tells the real step.
     step = len(out)
     offsets = list(range(step, total, step))
-    commands = [call_source("read_file", {"path": path, "offset": o, "size": step}) for o in offsets]
+    commands = [command(("read_file", {"path": path, "offset": o, "size": step})) for o in offsets]
     try:
         results = await repl.exec_many(commands, timeout_s=timeout_s, stop_when=_any_failed)
     except LinkDropped as drop:

@@ -6,22 +6,22 @@
   with stdout, `\\x04`, stderr (a traceback), `\\x04`, `>`.
 
 Program output is handed to `on_output` as it arrives. The host's own operations are host calls
-(host_call.py): a call with data, answered by one `@openbricks-result {json}` line that is parsed and
-never shown as program output. Files travel through host calls too (file_transfer.py). Every wait
+(host_call.py): a call with data and a fresh tag, answered by one frame carrying that tag, which is
+parsed and never shown as program output. Files travel through host calls too (file_transfer.py). Every wait
 has a timeout and a `LinkTimeout` that names what was awaited.
 """
 
 from __future__ import annotations
 
 import asyncio
-from collections.abc import Callable, Sequence
+from collections.abc import Awaitable, Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
 from openbricks_server.link import file_transfer
 from openbricks_server.link.base import Link
 from openbricks_server.link.errors import HubException, LinkDropped, LinkTimeout
-from openbricks_server.link.host_call import HubInfo, ResultLines, call_source, single_result
+from openbricks_server.link.host_call import CallOutput, Command, HubInfo, command, single_result
 from openbricks_server.link.raw_paste import RAW_BANNER, CommandInput
 
 CTRL_A, CTRL_B, CTRL_C, CTRL_D = b"\x01", b"\x02", b"\x03", b"\x04"
@@ -69,6 +69,8 @@ class RawRepl:
         self.timeout_s = timeout_s
         self.input = CommandInput(link, use_raw_paste=use_raw_paste, send_ahead=send_ahead)
         self._prompt_pending = False
+        self._sending = False  # a command is on its way to the hub
+        self._interrupt_due = False  # a Ctrl-C waits for the command to be sent
         #: The last `info()` answer, which later choices (compression) go by.
         self.info_cache: HubInfo | None = None
 
@@ -95,6 +97,7 @@ class RawRepl:
         a program running). A hub still booting may miss the request: it is repeated every
         `retry_s` until the banner comes or `timeout_s` runs out."""
         timeout_s = self.timeout_s if timeout_s is None else timeout_s
+        self._interrupt_due = False  # entering interrupts whatever runs anyway
         loop = asyncio.get_running_loop()
         deadline = loop.time() + timeout_s
         attempts = 0
@@ -143,8 +146,24 @@ class RawRepl:
         self._prompt_pending = False
 
     async def interrupt(self) -> None:
-        """Ctrl-C: raises KeyboardInterrupt in what runs on the hub (its output still follows)."""
+        """Ctrl-C: raises KeyboardInterrupt in what runs on the hub (its output still follows).
+
+        While a command is still being sent, the Ctrl-C waits until the hub has all of it: during
+        a raw-paste it would end the paste, and the rest of the command would land on the raw REPL's
+        line and run after all (during plain raw it would clear the line, and the Ctrl-D that
+        follows would soft-reset the hub).
+        """
+        if self._sending:
+            self._interrupt_due = True
+            return
         await self.link.write(CTRL_C)
+
+    async def _sent(self) -> None:
+        """The hub has the whole command: deliver a Ctrl-C asked for while it was being sent."""
+        self._sending = False
+        if self._interrupt_due:
+            self._interrupt_due = False
+            await self.link.write(CTRL_C)
 
     async def _await_prompt(self, timeout_s: float) -> None:
         if self._prompt_pending:
@@ -155,7 +174,7 @@ class RawRepl:
 
     async def exec(
         self,
-        source: str | bytes,
+        source: str | bytes | Command,
         *,
         on_output: Callable[[bytes], None] | None = None,
         timeout_s: float | None = None,
@@ -166,7 +185,7 @@ class RawRepl:
 
     async def exec_many(
         self,
-        sources: Sequence[str | bytes],
+        sources: Sequence[str | bytes | Command],
         *,
         on_output: Callable[[bytes], None] | None = None,
         timeout_s: float | None = None,
@@ -191,23 +210,31 @@ class RawRepl:
         command's output followed on (the hub keeps it meanwhile); otherwise LinkDropped.
         """
         timeout_s = self.timeout_s if timeout_s is None else timeout_s
-        blobs = [s.encode() if isinstance(s, str) else bytes(s) for s in sources]
+        commands = [s if isinstance(s, Command) else Command(s) for s in sources]
+        blobs = [c.source.encode() if isinstance(c.source, str) else bytes(c.source) for c in commands]
         results = []
         requested = False  # the current command's paste request went out with the previous end
         early = 0  # bytes of the current command sent along with its request
         for index, blob in enumerate(blobs):
             await self._await_prompt(timeout_s)
-            if not requested and self.input.raw_paste:
-                early = await self.input.request(blob, timeout_s)
-                requested = True
-            window = await self.input.read_grant(timeout_s, early) if requested else None
-            if window is None:
-                await self.input.send_plain_raw(blob, timeout_s)
-                requested, early = False, 0
-            else:
-                following = blobs[index + 1] if index + 1 < len(blobs) else None
-                requested, early = await self.input.send(blob, window, early, following, timeout_s)
-            result = await self._follow(on_output, timeout_s, follow_drops, on_link_event)
+            self._sending = True
+            try:
+                if not requested and self.input.raw_paste:
+                    early = await self.input.request(blob, timeout_s)
+                    requested = True
+                window = await self.input.read_grant(timeout_s, early) if requested else None
+                if window is None:
+                    await self.input.send_plain_raw(blob, timeout_s)
+                    requested, early = False, 0
+                else:
+                    following = blobs[index + 1] if index + 1 < len(blobs) else None
+                    requested, early = await self.input.send(blob, window, early, following, timeout_s)
+            finally:
+                self._sending = False
+            await self._sent()
+            result = await self._follow(
+                commands[index].tag, on_output, timeout_s, follow_drops, on_link_event
+            )
             if result.stderr:
                 if requested:
                     await self._cancel_requested_paste(early, timeout_s)
@@ -230,37 +257,48 @@ class RawRepl:
         if window is None:
             return
         await self.input.cancel(timeout_s)
-        await self._follow(None, timeout_s, False, None)
+        await self._follow(None, None, timeout_s, False, None)
         await self._await_prompt(timeout_s)
 
     async def _follow(
         self,
+        tag: str | None,
         on_output: Callable[[bytes], None] | None,
         timeout_s: float,
         follow_drops: bool,
         on_link_event: Callable[[LinkEvent], None] | None,
     ) -> ExecResult:
-        lines = ResultLines(on_output)
-        await self._read_resilient(
-            CTRL_D, "the command's output", timeout_s, lines.feed, follow_drops, on_link_event
-        )
-        lines.finish()
+        output = CallOutput(tag, on_output)
+
+        async def read_output(remaining: float) -> None:
+            while not output.ended:
+                rest = output.feed(await self.link.read_some("the command's output", remaining))
+                if rest is not None:
+                    self.link.unread(rest)
+
         stderr = bytearray()
+
+        async def read_errors(remaining: float) -> None:
+            await self.link.read_until(CTRL_D, "the command's error output", remaining, on_data=stderr.extend)
+
         await self._read_resilient(
-            CTRL_D, "the command's error output", timeout_s, stderr.extend, follow_drops, on_link_event
+            "the command's output", timeout_s, read_output, follow_drops, on_link_event
+        )
+        await self._read_resilient(
+            "the command's error output", timeout_s, read_errors, follow_drops, on_link_event
         )
         self._prompt_pending = True
-        return ExecResult(bytes(lines.output), bytes(stderr), lines.results)
+        return ExecResult(bytes(output.output), bytes(stderr), output.results)
 
     async def _read_resilient(
         self,
-        marker: bytes,
         what: str,
         timeout_s: float,
-        on_data: Callable[[bytes], None],
+        read: Callable[[float], Awaitable[None]],
         follow_drops: bool,
         on_link_event: Callable[[LinkEvent], None] | None,
     ) -> None:
+        """`read(remaining_s)` to its end within `timeout_s`, across drops when `follow_drops`."""
         loop = asyncio.get_running_loop()
         deadline = loop.time() + timeout_s
         while True:
@@ -268,7 +306,7 @@ class RawRepl:
             if remaining <= 0:
                 raise LinkTimeout(what, self.hub, timeout_s)
             try:
-                await self.link.read_until(marker, what, remaining, on_data=on_data)
+                await read(remaining)
                 return
             except LinkTimeout:
                 raise LinkTimeout(what, self.hub, timeout_s) from None
@@ -292,7 +330,7 @@ class RawRepl:
         **data: Any,
     ) -> dict:
         """Run host call `name(**data)` on the hub and return its result (raises HubCallError on failure)."""
-        result = await self.exec(call_source(name, data), on_output=on_output, timeout_s=timeout_s)
+        result = await self.exec(command((name, data)), on_output=on_output, timeout_s=timeout_s)
         return single_result(self.hub, name, result.results, result.stdout)
 
     async def info(self, *, timeout_s: float | None = None) -> HubInfo:
@@ -311,18 +349,18 @@ class RawRepl:
         """
         timeout_s = self.timeout_s if timeout_s is None else timeout_s
         await self._await_prompt(timeout_s)
-        await self.input.send_plain_raw(call_source("reset", {}).encode(), timeout_s)
-        lines = ResultLines(None)
-        while not lines.results:
-            line = await self.link.read_until(b"\n", "the hub's reply to reset", timeout_s)
-            if CTRL_D in line:  # the command ended instead of restarting the hub: it raised
-                stderr = line.split(CTRL_D, 1)[1] + b"\n"
-                stderr += await self.link.read_until(CTRL_D, "the error output of reset", timeout_s)
+        reset = command(("reset", {}))
+        await self.input.send_plain_raw(reset.source.encode(), timeout_s)
+        output = CallOutput(reset.tag, None)
+        while not output.results:
+            rest = output.feed(await self.link.read_some("the hub's reply to reset", timeout_s))
+            if rest is not None:  # the command ended instead of restarting the hub: it raised
+                self.link.unread(rest)
+                stderr = await self.link.read_until(CTRL_D, "the error output of reset", timeout_s)
                 self._prompt_pending = True
-                raise HubException(self.hub, stderr.decode("utf-8", "replace"), bytes(lines.output))
-            lines.feed(line + b"\n")
+                raise HubException(self.hub, stderr.decode("utf-8", "replace"), bytes(output.output))
         self._prompt_pending = False
-        return single_result(self.hub, "reset", lines.results, bytes(lines.output))
+        return single_result(self.hub, "reset", output.results, bytes(output.output))
 
     async def run(
         self,
@@ -342,7 +380,7 @@ class RawRepl:
         await self._await_prompt(self.timeout_s)
         try:
             (result,) = await self.exec_many(
-                [call_source("run", data)],
+                [command(("run", data))],
                 on_output=on_output,
                 timeout_s=timeout_s,
                 follow_drops=True,

@@ -34,7 +34,7 @@ class _Console:
         self.lines.append(" ".join([str(a) for a in args]))
 
     def results(self):
-        marker = host_calls.RESULT_MARKER
+        marker = host_calls.FRAME_PREFIX + "- result "
         return [json.loads(line[len(marker) :]) for line in self.lines if line.startswith(marker)]
 
     def close(self):
@@ -68,7 +68,7 @@ def test_info_reports_version_capabilities_as_one_marked_json_line():
         console.close()
     assert console.results() == [result]
     assert len(console.lines) == 1
-    assert result["ok"] and result["protocol"] == 1
+    assert result["ok"] and result["protocol"] == 2
     assert result["firmware"] == openbricks.firmware_label() == "2.7.1 (customized)"
     assert result["version"] == "2.7.1"
     assert result["accepts_mpy"] == hasattr(sys.implementation, "_mpy")
@@ -175,6 +175,34 @@ def test_a_stopped_run_reports_then_propagates_the_interrupt():
         finally:
             console.close()
         assert console.results() == [{"ok": True, "outcome": "stopped", "run": 0}]
+
+
+def test_a_result_frame_cut_by_a_ctrl_c_is_written_again_marked_then_the_stop_propagates():
+    with tmpdir.scratch() as directory:
+        path = directory + "/program.py"
+        host_calls.stage(_b64(b"x = 1\n"), path)
+        launcher.get(program_path=path, log_dir=directory + "/logs")
+        console = _Console()
+        cut = [True]
+
+        def cutting(*args, **kwargs):
+            if cut[0] and " result " in args[0]:
+                cut[0] = False
+                raise KeyboardInterrupt  # the write of the result frame was cut
+            console(*args, **kwargs)
+
+        host_calls.print = cutting
+        host_calls.tag("0a1b2c3d")
+        try:
+            with raises(KeyboardInterrupt):
+                host_calls.run()
+        finally:
+            host_calls.tag("-")
+            console.close()
+        assert len(console.lines) == 2 and console.lines[0] == "@openbricks:0a1b2c3d program\n"
+        again = "@openbricks:0a1b2c3d again result "
+        assert console.lines[1].startswith(again)
+        assert json.loads(console.lines[1][len(again) :]) == {"ok": True, "outcome": "finished", "run": 0}
 
 
 def test_run_without_a_staged_program_says_how_to_stage_one():

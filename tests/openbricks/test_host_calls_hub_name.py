@@ -14,7 +14,7 @@ class _Console:
         self.lines.append(" ".join([str(a) for a in args]))
 
     def results(self):
-        marker = host_calls.RESULT_MARKER
+        marker = host_calls.FRAME_PREFIX + "- result "
         return [json.loads(line[len(marker) :]) for line in self.lines if line.startswith(marker)]
 
     def close(self):

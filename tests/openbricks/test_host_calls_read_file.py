@@ -96,7 +96,7 @@ def test_reset_replies_first_then_restarts_the_hub():
         host_calls.reset()
     finally:
         console.close()
-    marker = host_calls.RESULT_MARKER
+    marker = host_calls.FRAME_PREFIX + "- result "
     assert len(console.lines) == 1 and console.lines[0].startswith(marker)
     assert json.loads(console.lines[0][len(marker) :]) == {"ok": True, "resetting": True}
     assert machine.board.resets == 1

@@ -5,7 +5,9 @@ from openbricks_server.commands.paste_probe import probe_command, sizes
 
 def test_each_probe_is_a_host_call_of_exactly_the_probed_size():
     for size in sizes(8192):
-        command, padding = probe_command(size, f"paste-probe-{size}")
-        assert len(command) == size
-        assert command.startswith(b"import openbricks.host_calls as h;h.paste_probe(token='paste-probe-")
-        assert command.endswith(b"padding='" + b"." * padding + b"')")
+        probe, padding = probe_command(size, f"paste-probe-{size}")
+        assert len(probe.source) == size
+        assert probe.source.startswith(
+            f"import openbricks.host_calls as h;h.tag('{probe.tag}');h.paste_probe("
+        )
+        assert probe.source.endswith("padding='" + "." * padding + "')")

@@ -36,6 +36,14 @@ def test_a_program_error_shows_its_traceback_and_exits_1(env, tmp_path):
     assert "the program ended with an error" in done.stderr
 
 
+def test_a_last_line_without_newline_and_imitated_result_lines_are_shown_as_printed(env):
+    code = "print('@openbricks-result {\"ok\": true}')\nprint('@openbricks:- result {}')\nprint('x', end='')"
+    done = cli(env, "run", "-n", "RobotA", "-c", code)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout == '@openbricks-result {"ok": true}\n@openbricks:- result {}\nx'
+    assert "printed no result" not in done.stderr
+
+
 def test_inline_code(env):
     done = cli(env, "run", "-n", "RobotA", "-c", "import openbricks; print(openbricks.__version__)")
     assert done.returncode == 0 and done.stdout == "2.7.1\n"

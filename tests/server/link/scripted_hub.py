@@ -30,7 +30,7 @@ FRIENDLY_BANNER = (
     b"MicroPython v1.27.0 on 2026-01-01; openbricks hub with ESP32S3\r\n"
     b'Type "help()" for more information.\r\n>>> '
 )
-RESULT_MARKER = "@openbricks-result "
+FRAME_PREFIX = "@openbricks:"
 TRACEBACK_HEAD = b'Traceback (most recent call last):\r\n  File "<stdin>", line 1, in <module>\r\n'
 # The hub's stdin ring is a little larger than MICROPY_REPL_STDIN_BUFFER_MAX (260 for 256): room for a
 # Ctrl-D and the next raw-paste request that a host sends right after a full window.
@@ -287,14 +287,21 @@ class _HostCalls:
 
     def __init__(self, hub: ScriptedHub):
         self.hub = hub
+        self._tag = "-"
 
     def __getattribute__(self, name: str):
         if name in object.__getattribute__(self, "hub").missing_calls:
             raise AttributeError(f"'module' object has no attribute '{name}'")
         return object.__getattribute__(self, name)
 
+    def tag(self, nonce):
+        self._tag = str(nonce)
+
+    def _frame(self, kind: str, payload: str = "") -> None:
+        self.hub._stdout(f"{FRAME_PREFIX}{self._tag} {kind}" + (f" {payload}" if payload else "") + "\n")
+
     def _reply(self, result: dict) -> dict:
-        self.hub._stdout(RESULT_MARKER + json.dumps(result) + "\n")
+        self._frame("result", json.dumps(result))
         return result
 
     def _call(self, fn, *args) -> dict:
@@ -310,7 +317,7 @@ class _HostCalls:
     def info(self):
         return self._call(
             lambda: {
-                "protocol": 1,
+                "protocol": 2,
                 "firmware": "openbricks 2.7.1 (emulated)",
                 "version": "2.7.1",
                 "chip": "esp32s3",
@@ -411,6 +418,7 @@ class _HostCalls:
         if source is None:
             return self._reply({"ok": False, "type": "OSError", "error": f"no program staged at {path}"})
         namespace = {"__name__": "__main__", "__builtins__": hub._builtins()}
+        self._frame("program")
         try:
             exec(compile(source.decode(), path, "exec"), namespace)  # noqa: S102
         except KeyboardInterrupt:

@@ -2,6 +2,7 @@
 
 import asyncio
 import os
+import re
 import zlib
 
 import pytest
@@ -244,6 +245,27 @@ def test_ctrl_c_stops_a_run_and_the_stop_is_an_outcome():
     run(scenario())
 
 
+def test_a_ctrl_c_asked_for_while_the_command_is_sent_waits_until_the_hub_has_all_of_it():
+    """Sent mid-paste, the Ctrl-C would end the paste and the rest of the command would run later
+    anyway, out of the host's sight (the next command then met a running program)."""
+
+    async def scenario():
+        hub, _, repl = await session()
+        await repl.put("/program.py", b"while True:\n    sleep_ms(10)\n")
+        running = asyncio.create_task(repl.run("/program.py"))
+        await asyncio.sleep(0)  # the run command is being pasted now
+        await repl.interrupt()
+        try:
+            result = await running
+            assert result["outcome"] == "stopped"
+        except HubException as exc:  # stopped before the program started: also a stop
+            assert "KeyboardInterrupt" in exc.summary
+        assert not hub.busy
+        assert (await repl.exec("print('ok')")).stdout == b"ok\r\n"
+
+    run(scenario())
+
+
 def test_get_reads_back_a_file_through_read_file_calls_with_data_only():
     async def scenario():
         hub, _, repl = await session()
@@ -253,7 +275,10 @@ def test_get_reads_back_a_file_through_read_file_calls_with_data_only():
         sent = hub.commands[before:]
         assert len(sent) == 5  # 9000 bytes in 2048-byte slices
         assert all(
-            c.startswith("import openbricks.host_calls as h;h.read_file(path='/data.bin'") for c in sent
+            re.match(
+                r"import openbricks.host_calls as h;h.tag\('[0-9a-f]{8}'\);h.read_file\(path='/data.bin'", c
+            )
+            for c in sent
         )
         assert "offset=8192, size=2048" in sent[-1]
 
@@ -292,7 +317,9 @@ def test_reset_hub_returns_the_hubs_confirmation_and_the_restarted_hub_takes_a_n
     async def scenario():
         hub, _, repl = await session()
         assert await repl.reset_hub() == {"ok": True, "resetting": True}
-        assert hub.commands[-1] == "import openbricks.host_calls as h;h.reset()"
+        assert re.fullmatch(
+            r"import openbricks.host_calls as h;h.tag\('[0-9a-f]{8}'\);h.reset\(\)", hub.commands[-1]
+        )
         await asyncio.sleep(0.05)
         assert hub.resets == 1
         await repl.enter()

@@ -166,7 +166,7 @@ class Host:
 
 
 def result_of(output):
-    marker = "@openbricks-result "
+    marker = "@openbricks:- result "  # an untagged call's result frame
     lines = [line for line in output.splitlines() if line.startswith(marker)]
     assert len(lines) == 1, output
     return json.loads(lines[0][len(marker) :])
