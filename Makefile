@@ -19,7 +19,7 @@ MICROPY_BUILD := $(REPO_ROOT)/build/micropython
 UNIX_MICROPYTHON := $(MICROPY_BUILD)/micropython
 NATIVE_SOURCES := $(wildcard firmware/native/*.[ch] firmware/native/user_c_modules/openbricks/*)
 
-.PHONY: setup system-packages test test-fast lint console bench micropython
+.PHONY: setup system-packages test test-fast lint console bench micropython web web-check
 
 setup: $(VENV)/.installed $(MPY_NODE)
 
@@ -47,24 +47,49 @@ micropython: $(UNIX_MICROPYTHON)
 $(UNIX_MICROPYTHON): $(NATIVE_SOURCES) firmware/unix_micropython.py $(wildcard $(MICROPY_SRC)) | $(VENV)/.installed
 	$(PY) firmware/unix_micropython.py --src "$(MICROPY_SRC)" --build "$(MICROPY_BUILD)"
 
+# The browser console (web/): built into the Python package (server/daemon/static), which the daemon
+# serves at `/`, so pip users need no node. Each step is redone only when one of its inputs changed.
+WEB_STATIC := server/daemon/static
+WEB_NODE := web/node_modules/.installed
+WEB_CONFIG := web/index.html web/vite.config.ts web/svelte.config.js web/tsconfig.json
+WEB_SOURCES := $(shell find web/src -type f 2>/dev/null) $(WEB_CONFIG)
+WEB_TESTS := $(shell find web/tests -type f 2>/dev/null)
+
+$(WEB_NODE): web/package.json web/package-lock.json
+	cd web && npm ci --no-audit --no-fund --loglevel=error
+	touch $@
+
+$(WEB_STATIC)/index.html: $(WEB_NODE) $(WEB_SOURCES)
+	cd web && npm run build --silent
+	touch $@
+
+# Type-check (svelte-check) and the unit tests (vitest).
+build/web-check.stamp: $(WEB_NODE) $(WEB_SOURCES) $(WEB_TESTS)
+	cd web && npm run check --silent && npm test --silent
+	mkdir -p build && touch $@
+
+web: $(WEB_STATIC)/index.html
+
+web-check: build/web-check.stamp
+
 lint: setup
 	$(VENV)/bin/ruff check .
 	$(VENV)/bin/lint-imports
 
 # Rebuild the C extension in place (after editing firmware/native), then run everything.
 # One pytest run: fast unit tests first, the e2e-marked ones last (tests/conftest.py orders them).
-test: setup lint micropython
+test: setup lint micropython web-check web
 	$(PY) setup.py -q build_ext --inplace
 	$(PY) -m pytest
 
-test-fast: setup micropython
+test-fast: setup micropython web
 	$(PY) setup.py -q build_ext --inplace
 	$(PY) -m pytest -m "not e2e" -q
 
 # The embedded default: a simulated hub (virtual hub + MuJoCo), no hardware. It runs in the
 # foreground until Ctrl-C; drive it from another terminal with the `openbricks` CLI.
 HUB ?= SimHub
-console: setup
+console: setup web
 	$(PY) setup.py -q build_ext --inplace
 	@echo "virtual hub $(HUB) with the simulator behind it; in another terminal:"
 	@echo "  .venv/bin/openbricks run -n $(HUB) examples/drivebase_square.py"

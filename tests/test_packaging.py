@@ -59,5 +59,8 @@ def test_the_wheel_carries_everything_an_installed_openbricks_reads(tmp_path):
     assert docs and docs <= names, "the offline manual of `openbricks docs`"
     assert "openbricks_server/keys/firmware_signing.pub" in names, "flash's provenance check"
     assert "openbricks_server/flash/qtr_starter.json" in names, "flash --with-qtr-init"
+    console = "openbricks_server/daemon/static/"
+    assert console + "index.html" in names, "the browser console the daemon serves (`make web` builds it)"
+    assert any(n.startswith(console + "assets/") and n.endswith(".js") for n in names), "the console's script"
     for extension in ("openbricks_native", "openbricks_mjcontrol"):
         assert any(n.startswith(extension) and n.endswith(".so") for n in names), extension

@@ -1,0 +1,78 @@
+/**
+ * Every mutating thing the page can ask of the daemon, in one place: each call reports failure through
+ * the daemon's own message and hint, and refuses up front (with the reason) when the role or competition
+ * mode forbids it, so no control can mutate by a path the disabled-state logic does not know about.
+ */
+
+import { api, type Hub } from "./api";
+import { consoleModel as model } from "./console.svelte";
+
+const enc = encodeURIComponent;
+
+function refusedFor(kind: "mutate" | "upload"): boolean {
+  const reason = kind === "upload" ? model.uploadLockReason : model.readOnlyReason;
+  if (reason) model.notify("warn", reason);
+  return reason !== null;
+}
+
+export interface StopAllResult {
+  hub_id: string;
+  ok: boolean;
+  message?: string;
+}
+
+export async function stopAll(): Promise<void> {
+  if (refusedFor("mutate")) return;
+  try {
+    const r = await api.post<{ results?: StopAllResult[] } | StopAllResult[]>("/api/hubs/stop-all");
+    const results = Array.isArray(r) ? r : (r?.results ?? []);
+    const failed = results.filter((x) => !x.ok);
+    if (failed.length) model.notify("error", `STOP ALL: ${failed.length} hub(s) did not confirm: ${failed.map((f) => `${hubName(f.hub_id)} (${f.message ?? "no answer"})`).join(", ")}`);
+    else model.notify("info", `STOP ALL sent to ${results.length || "every"} hub${results.length === 1 ? "" : "s"}.`);
+  } catch (err) {
+    model.fail(err, "STOP ALL");
+  }
+}
+
+export async function stop(hubId: string): Promise<void> {
+  if (refusedFor("mutate")) return;
+  try {
+    await api.post(`/api/hubs/${enc(hubId)}/stop`);
+  } catch (err) {
+    model.fail(err, `Stop ${hubName(hubId)}`);
+  }
+}
+
+export async function hubAction(hubId: string, action: "identify" | "connect" | "disconnect"): Promise<void> {
+  if (refusedFor("mutate")) return;
+  try {
+    await api.post(`/api/hubs/${enc(hubId)}/${action}`);
+  } catch (err) {
+    model.fail(err, `${action[0].toUpperCase()}${action.slice(1)} ${hubName(hubId)}`);
+  }
+}
+
+/** What to run: a stored program by name (the daemon records the exact version) or the staged one. */
+export type RunRequest = { program: string } | { staged: true };
+
+/**
+ * Run (or upload) on several hubs at once, each its own request so one busy hub does not hold back the
+ * others; returns the hubs that accepted.
+ */
+export async function runOn(hubIds: string[], what: RunRequest, mode: "run" | "upload" = "run"): Promise<string[]> {
+  if (refusedFor("upload")) return [];
+  const body = "program" in what ? { program: what.program } : {};
+  const results = await Promise.allSettled(hubIds.map((id) => api.post(`/api/hubs/${enc(id)}/${mode}`, body)));
+  const ok: string[] = [];
+  results.forEach((r, i) => {
+    if (r.status === "fulfilled") ok.push(hubIds[i]);
+    else model.fail(r.reason, `${mode === "run" ? "Run" : "Upload"} on ${hubName(hubIds[i])}`);
+  });
+  if (ok.length && mode === "upload") model.notify("info", `Uploaded to ${ok.map(hubName).join(", ")}.`);
+  return ok;
+}
+
+export function hubName(hubId: string): string {
+  const h: Hub | undefined = model.hubs[hubId];
+  return h ? h.name : hubId;
+}

@@ -1,0 +1,254 @@
+/**
+ * The page's one live model of the daemon: hubs, who we are, the event stream's health, each hub's output
+ * and each run's telemetry. Pages read it; only `applyEvent` and the refetch paths write it, so what a page
+ * shows always comes from the daemon (REST for the state, the event stream for changes).
+ */
+
+import { SvelteSet } from "svelte/reactivity";
+import { ApiError, api, type Hub, type Me, type OutputLine, type RunOutcome, type TelemetrySample, query } from "./api";
+import type { Envelope, Refetch, StreamState } from "./events";
+import { HubOutput } from "./output";
+import { RunTelemetry } from "./telemetry";
+
+export interface Notice {
+  id: number;
+  kind: "info" | "error" | "warn";
+  message: string;
+  hint?: string | null;
+}
+
+export interface RunInfo {
+  run_id: string;
+  hub_id: string | null;
+  program_name: string | null;
+  started_ms: number;
+  ended_ms: number | null;
+  outcome: RunOutcome | null;
+}
+
+/** A daemon job (sim run, sweep, flash, servo scan) as its events describe it. */
+export interface Job {
+  job_id: string;
+  kind: string;
+  state: "queued" | "running" | "done" | "failed" | "cancelled";
+  progress: number | null;
+  label?: string | null;
+  message?: string | null;
+  result?: Record<string, unknown> | null;
+  updated_ms: number;
+}
+
+let noticeIds = 0;
+
+export class ConsoleModel {
+  me = $state<Me | null>(null);
+  hubs = $state<Record<string, Hub>>({});
+  selected = new SvelteSet<string>();
+  stream = $state<StreamState>("connecting");
+  streamDetail = $state<string | null>(null);
+  notices = $state<Notice[]>([]);
+  /** Runs seen on the stream, newest last (the History page reads the store; this feeds the live pages). */
+  runs = $state<Record<string, RunInfo>>({});
+  lastOutcome = $state<Record<string, RunOutcome>>({});
+  jobs = $state<Record<string, Job>>({});
+  /** Bumped whenever a refetch reloaded the state, so pages showing stored data reload too. */
+  generation = $state(0);
+  competition = $state({ on: false, matchSeconds: 150, matchStartedMs: null as number | null });
+  now = $state(Date.now());
+  /** The daemon's API paths (from its OpenAPI schema): pages whose API is missing say so. */
+  apiPaths = $state<Set<string> | null>(null);
+
+  readonly outputs = new Map<string, HubOutput>();
+  readonly telemetry = new Map<string, RunTelemetry>();
+
+  hubList = $derived(Object.values(this.hubs).sort((a, b) => a.name.localeCompare(b.name) || a.hub_id.localeCompare(b.hub_id)));
+  anyRunning = $derived(Object.values(this.hubs).some((h) => h.status === "running"));
+
+  constructor(private readonly fetchLines = fetchRunLines) {}
+
+  /** Why a mutating control is disabled right now, or null when it may be used. */
+  readOnlyReason = $derived(
+    this.me === null
+      ? "Waiting for the console to say who you are."
+      : this.me.role === "viewer"
+        ? "Viewer role: read-only. Open the console with an operator token to change anything."
+        : null,
+  );
+
+  /** Uploads and new runs are refused in competition mode while a run is on. */
+  uploadLockReason = $derived(
+    this.readOnlyReason ??
+      (this.competition.on && this.anyRunning ? "Competition mode: uploads are locked while a run is on." : null),
+  );
+
+  /** Whether the daemon serves `path` (as written in its OpenAPI schema, e.g. "/api/sim/runs"). */
+  hasApi(path: string): boolean {
+    return this.apiPaths?.has(path) ?? false;
+  }
+
+  output(hubId: string): HubOutput {
+    let o = this.outputs.get(hubId);
+    if (!o) {
+      o = new HubOutput();
+      this.outputs.set(hubId, o);
+    }
+    return o;
+  }
+
+  runTelemetry(runId: string): RunTelemetry {
+    let t = this.telemetry.get(runId);
+    if (!t) {
+      t = new RunTelemetry();
+      this.telemetry.set(runId, t);
+    }
+    return t;
+  }
+
+  notify(kind: Notice["kind"], message: string, hint?: string | null): void {
+    const id = ++noticeIds;
+    this.notices = [...this.notices.slice(-4), { id, kind, message, hint }];
+    setTimeout(() => this.dismiss(id), kind === "error" ? 12000 : 5000);
+  }
+
+  dismiss(id: number): void {
+    this.notices = this.notices.filter((n) => n.id !== id);
+  }
+
+  /** Show a failed call the way the daemon explained it. */
+  fail(err: unknown, what: string): void {
+    if (err instanceof ApiError) this.notify("error", `${what}: ${err.message}`, err.hint);
+    else this.notify("error", `${what}: ${String(err)}`);
+  }
+
+  setHubs(list: Hub[]): void {
+    const next: Record<string, Hub> = {};
+    for (const h of list) next[h.hub_id] = h;
+    this.hubs = next;
+    for (const id of [...this.selected]) if (!next[id]) this.selected.delete(id);
+  }
+
+  /** Reload everything the stream may have missed. */
+  async refetch(r?: Refetch): Promise<void> {
+    if (r && !r.quiet) this.notify("warn", r.message);
+    try {
+      const [me, hubs] = await Promise.all([api.get<Me>("/api/auth/me"), api.get<Hub[] | { hubs: Hub[] }>("/api/hubs")]);
+      this.me = me;
+      this.setHubs(Array.isArray(hubs) ? hubs : hubs.hubs);
+    } catch (err) {
+      this.fail(err, "Loading the console's state");
+    }
+    if (this.apiPaths === null) {
+      try {
+        const schema = await api.get<{ paths: Record<string, unknown> }>("/openapi.json");
+        this.apiPaths = new Set(Object.keys(schema.paths ?? {}));
+      } catch {
+        this.apiPaths = new Set();
+      }
+    }
+    // Each open run's output is brought up to date from the store.
+    for (const [hubId, out] of this.outputs) {
+      const hub = this.hubs[hubId];
+      if (hub?.run_id && out.hasRun(hub.run_id)) void this.fillHole(hubId, hub.run_id, out.lastLine(hub.run_id));
+    }
+    this.generation += 1;
+  }
+
+  applyEvent(e: Envelope): void {
+    const d = e.data ?? {};
+    switch (e.type) {
+      case "hub":
+      case "hub_changed":
+      case "hub_status": {
+        const hub = ((d as { hub?: Hub }).hub ?? d) as Hub;
+        if (hub.hub_id) this.hubs[hub.hub_id] = { ...this.hubs[hub.hub_id], ...hub };
+        break;
+      }
+      case "hub_removed":
+        if (e.hub) delete this.hubs[e.hub];
+        break;
+      case "run_started": {
+        const run = e.run ?? (d.run_id as string);
+        const hubId = e.hub ?? (d.hub_id as string) ?? null;
+        const info: RunInfo = {
+          run_id: run,
+          hub_id: hubId,
+          program_name: (d.program_name as string) ?? null,
+          started_ms: (d.started_ms as number) ?? e.ts,
+          ended_ms: null,
+          outcome: null,
+        };
+        this.runs[run] = info;
+        if (hubId) {
+          const label = info.program_name ? `▶ ${info.program_name}` : "▶ run";
+          this.output(hubId).startRun(run, `${label} started (${(d.origin as string) ?? "daemon"})`, info.started_ms);
+        }
+        break;
+      }
+      case "output":
+      case "run_output": {
+        const hubId = e.hub;
+        const run = e.run;
+        if (!hubId || !run) break;
+        const lines = (d.lines as OutputLine[]) ?? [d as unknown as OutputLine];
+        const hole = this.output(hubId).append(run, lines);
+        if (hole) void this.fillHole(hubId, run, hole.after);
+        break;
+      }
+      case "telemetry":
+      case "run_telemetry": {
+        if (!e.run) break;
+        const samples = (d.samples as TelemetrySample[]) ?? [d as unknown as TelemetrySample];
+        this.runTelemetry(e.run).add(samples);
+        break;
+      }
+      case "run_gap":
+        if (e.hub) this.output(e.hub).note(`[link dropped: ${(d.reason as string) ?? "output may be missing"}]`, e.run, "error");
+        break;
+      case "run_ended": {
+        const run = e.run ?? (d.run_id as string);
+        const outcome = d.outcome as RunOutcome;
+        if (this.runs[run]) {
+          this.runs[run].ended_ms = (d.ended_ms as number) ?? e.ts;
+          this.runs[run].outcome = outcome;
+        }
+        const hubId = e.hub ?? this.runs[run]?.hub_id;
+        if (hubId) {
+          this.lastOutcome[hubId] = outcome;
+          const detail = d.detail ? `: ${d.detail as string}` : "";
+          this.output(hubId).note(`■ ${outcome}${detail}`, run, outcome === "error" || outcome === "dropped" ? "error" : "note");
+        }
+        break;
+      }
+      case "job":
+      case "job_progress":
+      case "job_changed": {
+        const job = ((d as { job?: Job }).job ?? d) as Job;
+        if (job.job_id) this.jobs[job.job_id] = { ...this.jobs[job.job_id], ...job, updated_ms: e.ts };
+        break;
+      }
+      default:
+        break;
+    }
+  }
+
+  private async fillHole(hubId: string, run: string, after: number): Promise<void> {
+    try {
+      this.output(hubId).fill(run, await this.fetchLines(run, after));
+    } catch (err) {
+      this.output(hubId).fill(run, []);
+      this.fail(err, "Loading missed output");
+    }
+  }
+
+  /** Start the match timer of competition mode. */
+  startMatch(): void {
+    this.competition.matchStartedMs = Date.now();
+  }
+}
+
+export async function fetchRunLines(run: string, after: number): Promise<OutputLine[]> {
+  const r = await api.get<OutputLine[] | { lines: OutputLine[] }>(`/api/runs/${encodeURIComponent(run)}/output${query({ after })}`);
+  return Array.isArray(r) ? r : r.lines;
+}
+
+export const consoleModel = new ConsoleModel();

@@ -1,0 +1,56 @@
+/**
+ * Telemetry of one run: named series of (time, value) from `plot(name, value)` on the hub (or the
+ * simulator's pose and speeds), kept as uPlot's column arrays so a plot redraws without copying.
+ */
+
+import type { TelemetrySample } from "./api";
+
+export class RunTelemetry {
+  /** series name → [times in s since the first sample, values] */
+  readonly series = new Map<string, { t: number[]; v: number[] }>();
+  private t0: number | null = null;
+  private readonly listeners = new Set<() => void>();
+  version = 0;
+
+  constructor(readonly limit = 20000) {}
+
+  add(samples: TelemetrySample[]): void {
+    if (!samples.length) return;
+    for (const s of samples) {
+      const ms = s.hub_ms ?? s.recv_ms;
+      if (this.t0 === null) this.t0 = ms;
+      let col = this.series.get(s.name);
+      if (!col) {
+        col = { t: [], v: [] };
+        this.series.set(s.name, col);
+      }
+      col.t.push((ms - this.t0) / 1000);
+      col.v.push(s.value);
+      if (col.t.length > this.limit) {
+        col.t.splice(0, col.t.length - this.limit);
+        col.v.splice(0, col.v.length - this.limit);
+      }
+    }
+    this.version += 1;
+    for (const fn of this.listeners) fn();
+  }
+
+  names(): string[] {
+    return [...this.series.keys()].sort();
+  }
+
+  subscribe(fn: () => void): () => void {
+    this.listeners.add(fn);
+    return () => this.listeners.delete(fn);
+  }
+
+  /** Every series as CSV rows `name,t_s,value`, for download. */
+  csv(): string {
+    const rows = ["name,t_s,value"];
+    for (const name of this.names()) {
+      const col = this.series.get(name)!;
+      for (let i = 0; i < col.t.length; i++) rows.push(`${name},${col.t[i].toFixed(3)},${col.v[i]}`);
+    }
+    return rows.join("\n") + "\n";
+  }
+}
