@@ -118,11 +118,11 @@ export async function request<T>(method: string, path: string, body?: unknown, t
   } catch {
     payload = null;
   }
-  if (!response.ok) throw toApiError(response.status, payload, text);
+  if (!response.ok) throw toApiError(response.status, payload, text, `${method} ${path}`);
   return payload as T;
 }
 
-export function toApiError(status: number, payload: unknown, text = ""): ApiError {
+export function toApiError(status: number, payload: unknown, text = "", what = "the request"): ApiError {
   if (payload && typeof payload === "object" && "error" in payload) {
     const p = payload as Record<string, unknown>;
     return new ApiError(status, String(p.error), String(p.message ?? p.error), (p.hint as string) ?? null, p);
@@ -133,7 +133,9 @@ export function toApiError(status: number, payload: unknown, text = ""): ApiErro
     const message = typeof detail === "string" ? detail : JSON.stringify(detail);
     return new ApiError(status, "http_" + status, message, null);
   }
-  return new ApiError(status, "http_" + status, text.slice(0, 300) || `HTTP ${status}`, null);
+  // Not the daemon's JSON (a proxy's page, an older daemon): say what failed, not the page's markup.
+  const plain = /^\s*</.test(text) ? "" : text.slice(0, 200);
+  return new ApiError(status, "http_" + status, `${what} failed with HTTP ${status}${plain ? `: ${plain}` : ""}`, status === 404 ? "This daemon may be older than the page: is `openbricks console` up to date?" : null);
 }
 
 export const api = {
