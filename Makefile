@@ -86,15 +86,12 @@ test-fast: setup micropython web
 	$(PY) setup.py -q build_ext --inplace
 	$(PY) -m pytest -m "not e2e" -q
 
-# The embedded default: a simulated hub (virtual hub + MuJoCo), no hardware. It runs in the
-# foreground until Ctrl-C; drive it from another terminal with the `openbricks` CLI.
-HUB ?= SimHub
+# The embedded default: the console daemon with two simulated hubs (virtual hub + MuJoCo each), no
+# hardware. It runs in the foreground and prints the URL to open (with its sign-in token); Ctrl-C stops
+# it and its virtual hubs. The `openbricks` CLI in another terminal goes through it.
 console: setup web
 	$(PY) setup.py -q build_ext --inplace
-	@echo "virtual hub $(HUB) with the simulator behind it; in another terminal:"
-	@echo "  .venv/bin/openbricks run -n $(HUB) examples/drivebase_square.py"
-	@echo "  .venv/bin/openbricks log -n $(HUB)"
-	$(PY) -m openbricks_sim.virtual_hub --name $(HUB) --pty
+	$(VENV)/bin/openbricks console
 
 bench: setup
 	$(PY) setup.py -q build_ext --inplace

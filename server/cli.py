@@ -26,6 +26,7 @@ COMMANDS = {
     "docs": "docs",
     "doc": "docs",
     "sim": "sim",
+    "console": "console",
 }
 
 
@@ -292,6 +293,65 @@ def _add_docs(sub):
     return p
 
 
+def _console_options(parser, serving: bool):
+    parser.add_argument(
+        "--data-dir",
+        help="Folder of the console's database (run history, programs, tokens). Default: the user data dir.",
+    )
+    if not serving:
+        return
+    parser.add_argument(
+        "--host",
+        default="127.0.0.1",
+        help=(
+            "Address to listen on. Default: %(default)s (this computer only). Any other address refuses to "
+            "start until a token was minted with `openbricks console token`."
+        ),
+    )
+    parser.add_argument("--port", type=int, default=8765, help="Port to listen on. Default: %(default)s.")
+
+
+def _add_console(sub):
+    p = sub.add_parser(
+        "console",
+        help="start the console daemon: every hub, the run history and the web console in one place",
+        description=(
+            "Start the console daemon in the foreground: it holds the links to every hub (Bluetooth, USB, "
+            "virtual), keeps the run history and serves the web console and its API. It prints the URL to "
+            "open (with a sign-in token); Ctrl-C stops it and its virtual hubs."
+        ),
+    )
+    _console_options(p, serving=True)
+    p.add_argument(
+        "--virtual",
+        type=int,
+        default=2,
+        metavar="N",
+        help="Virtual hubs (with the simulator behind them) to start. Default: %(default)s.",
+    )
+    p.add_argument("--world", help="Simulator world of the virtual hubs (e.g. line_track). Default: empty.")
+    p.add_argument("--no-ble", action="store_true", help="Do not scan for or connect to Bluetooth hubs.")
+    p.add_argument(
+        "--allow-host",
+        action="append",
+        metavar="NAME",
+        help="Also answer to this host name (e.g. laptop.local) when listening on the network. Repeatable.",
+    )
+    actions = p.add_subparsers(dest="console_command", metavar="ACTION")
+    token = actions.add_parser(
+        "token",
+        help="mint an access token (viewer or operator)",
+        description=(
+            "Mint a token for another person or a script: viewers see hubs, output and history; operators "
+            "may also run, stop and upload. The token is printed once; only its hash is stored."
+        ),
+    )
+    token.add_argument("--role", required=True, choices=("viewer", "operator"), help="What the token may do.")
+    token.add_argument("--label", help="Its name in the audit log. Default: viewer-N / operator-N.")
+    _console_options(token, serving=False)
+    return p
+
+
 def _add_sim(sub):
     return sub.add_parser(
         "sim",
@@ -323,6 +383,7 @@ def build_parser() -> argparse.ArgumentParser:
         _add_paste_probe,
         _add_docs,
         _add_sim,
+        _add_console,
     ):
         command = add(sub)
         command.set_defaults(command_parser=command)  # lets _check report errors with the command's usage

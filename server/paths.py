@@ -5,7 +5,9 @@ Two roots, each overridable so tests (and users with odd setups) can move them:
 - the data dir (``OPENBRICKS_DATA_DIR``; default ``~/.local/share/openbricks`` on Linux): state that must
   survive, such as hub locks and the virtual-hub registry;
 - the cache dir (``OPENBRICKS_CACHE_DIR``; default ``~/.cache/openbricks``): things that can be fetched
-  again, such as downloaded firmware releases and rendered docs.
+  again, such as downloaded firmware releases and rendered docs;
+- the runtime dir (``OPENBRICKS_RUNTIME_DIR``; default ``$XDG_RUNTIME_DIR/openbricks`` on Linux): what
+  only lives while a process runs, such as the console daemon's URL and local token.
 
 Directories are created on first use, not at import, so `openbricks --help` touches no disk.
 """
@@ -18,6 +20,7 @@ from pathlib import Path
 APP_NAME = "openbricks"
 DATA_DIR_ENV = "OPENBRICKS_DATA_DIR"
 CACHE_DIR_ENV = "OPENBRICKS_CACHE_DIR"
+RUNTIME_DIR_ENV = "OPENBRICKS_RUNTIME_DIR"
 
 
 def _from_env_or(env: str, default) -> Path:
@@ -37,6 +40,13 @@ def cache_dir() -> Path:
     import platformdirs
 
     return _from_env_or(CACHE_DIR_ENV, lambda: platformdirs.user_cache_path(APP_NAME, appauthor=False))
+
+
+def runtime_dir() -> Path:
+    """Root of what lives only while a process runs (gone after a reboot on most systems)."""
+    import platformdirs
+
+    return _from_env_or(RUNTIME_DIR_ENV, lambda: platformdirs.user_runtime_path(APP_NAME, appauthor=False))
 
 
 def ensure(path: Path) -> Path:

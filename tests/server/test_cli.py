@@ -25,6 +25,7 @@ def test_every_command_of_chapter_3_is_there():
         "docs",
         "doc",
         "sim",
+        "console",
     }
 
 
@@ -53,6 +54,11 @@ def test_defaults_are_the_manuals():
     probe = parse("paste-probe", "-n", "A")
     assert (probe.max, probe.timeout, probe.scan_timeout) == (8192, 15.0, 5.0)
     assert parse("doc", "cli").topic == "cli"
+    console = parse("console")
+    assert (console.host, console.port, console.virtual, console.world) == ("127.0.0.1", 8765, 2, None)
+    assert (console.data_dir, console.no_ble, console.console_command) == (None, False, None)
+    token = parse("console", "token", "--role", "viewer")
+    assert (token.console_command, token.role, token.label) == ("token", "viewer", None)
 
 
 @pytest.mark.parametrize(
@@ -89,7 +95,8 @@ def test_help_imports_no_command_machinery():
         "except SystemExit:\n"
         "    pass\n"
         "heavy = [m for m in ('asyncio', 'bleak', 'serial', 'mujoco', 'cryptography', 'openbricks_native',\n"
-        "                     'openbricks_server.commands', 'openbricks_server.link') if m in sys.modules]\n"
+        "                     'openbricks_server.commands', 'openbricks_server.link', 'fastapi', 'uvicorn',\n"
+        "                     'pydantic', 'openbricks_server.daemon.app') if m in sys.modules]\n"
         "print(heavy, file=sys.stderr)\n"
     )
     done = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, timeout=60)

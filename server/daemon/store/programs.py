@@ -1,0 +1,81 @@
+"""Stored programs and their version history: a program lives in the daemon, never only in a browser."""
+
+from __future__ import annotations
+
+import hashlib
+
+from openbricks_server.daemon.store.db import Database, now_ms
+
+VERSION_COLUMNS = "p.name, v.version, v.sha256, v.size, v.created_ms, v.who"
+_JOINED = "programs p JOIN program_versions v ON v.program_id=p.program_id"
+
+
+def sha256_text(source: str) -> str:
+    return hashlib.sha256(source.encode("utf-8")).hexdigest()
+
+
+class Programs:
+    def __init__(self, db: Database):
+        self.db = db
+
+    def save(self, name: str, source: str, who: str | None) -> tuple[dict, bool]:
+        """Store `source` as the newest version of `name`; returns (the version, whether it is new).
+        Saving the text the newest version already has adds no version."""
+        digest = sha256_text(source)
+        stamp = now_ms()
+        with self.db.transaction() as conn:
+            row = conn.execute("SELECT program_id FROM programs WHERE name=?", (name,)).fetchone()
+            if row is None:
+                program_id = conn.execute(
+                    "INSERT INTO programs (name, created_ms, updated_ms) VALUES (?,?,?)", (name, stamp, stamp)
+                ).lastrowid
+                latest = None
+            else:
+                program_id = row[0]
+                latest = conn.execute(
+                    "SELECT version, sha256 FROM program_versions WHERE program_id=? "
+                    "ORDER BY version DESC LIMIT 1",
+                    (program_id,),
+                ).fetchone()
+            created = latest is None or latest["sha256"] != digest
+            if created:
+                version = 1 if latest is None else latest["version"] + 1
+                conn.execute(
+                    "INSERT INTO program_versions "
+                    "(program_id, version, source, sha256, size, created_ms, who) VALUES (?,?,?,?,?,?,?)",
+                    (program_id, version, source, digest, len(source.encode("utf-8")), stamp, who),
+                )
+                conn.execute("UPDATE programs SET updated_ms=? WHERE program_id=?", (stamp, program_id))
+        return self.version(name, None), created
+
+    def list(self) -> list[dict]:
+        return [
+            dict(r)
+            for r in self.db.query(
+                f"SELECT {VERSION_COLUMNS} FROM {_JOINED} "
+                "WHERE v.version=(SELECT max(version) FROM program_versions WHERE program_id=p.program_id) "
+                "ORDER BY p.name"
+            )
+        ]
+
+    def version(self, name: str, version: int | None) -> dict | None:
+        """One version of a program with its source (the newest when `version` is None), or None."""
+        sql = f"SELECT {VERSION_COLUMNS}, v.source FROM {_JOINED} WHERE p.name=? "
+        if version is None:
+            row = self.db.query_one(sql + "ORDER BY v.version DESC LIMIT 1", (name,))
+        else:
+            row = self.db.query_one(sql + "AND v.version=?", (name, version))
+        return dict(row) if row else None
+
+    def versions(self, name: str) -> list[dict]:
+        return [
+            dict(r)
+            for r in self.db.query(
+                f"SELECT {VERSION_COLUMNS} FROM {_JOINED} WHERE p.name=? ORDER BY v.version DESC",
+                (name,),
+            )
+        ]
+
+    def delete(self, name: str) -> bool:
+        with self.db.transaction() as conn:
+            return conn.execute("DELETE FROM programs WHERE name=?", (name,)).rowcount > 0

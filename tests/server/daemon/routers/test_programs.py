@@ -1,0 +1,82 @@
+"""Stored programs over the API: versions, and bad input refused with a specific error before storing."""
+
+import pytest
+
+
+def test_programs_are_stored_with_their_versions(operator):
+    first = operator.put("/api/programs/square.py", json={"source": "print('v1')\n"}).json()
+    same = operator.put("/api/programs/square.py", json={"source": "print('v1')\n"}).json()
+    second = operator.put("/api/programs/square.py", json={"source": "print('v2')\n"}).json()
+    assert (first["created"], same["created"], second["created"]) == (True, False, True)
+    assert second["program"]["version"] == 2 and second["program"]["who"] == "local"
+    assert operator.get("/api/programs/square.py").json()["source"] == "print('v2')\n"
+    assert operator.get("/api/programs/square.py/versions/1").json()["source"] == "print('v1')\n"
+    assert [v["version"] for v in operator.get("/api/programs/square.py/versions").json()] == [2, 1]
+    assert [p["name"] for p in operator.get("/api/programs").json()] == ["square.py"]
+    assert operator.delete("/api/programs/square.py").status_code == 204
+    assert operator.get("/api/programs/square.py").json()["error"] == "not_found"
+
+
+def test_a_syntax_error_names_file_line_and_column_and_nothing_is_stored(operator):
+    refused = operator.put("/api/programs/bad.py", json={"source": "x = 1\nif x\n    pass\n"})
+    assert refused.status_code == 422
+    error = refused.json()
+    assert error["error"] == "syntax_error"
+    assert error["message"].startswith("bad.py, line 2:") and "if x" in error["message"]
+    assert error["detail"]["line"] == 2 and error["detail"]["column"] and error["hint"]
+    assert operator.get("/api/programs/bad.py").status_code == 404
+
+
+def test_the_syntax_check_never_runs_the_program(operator, tmp_path):
+    marker = tmp_path / "ran"
+    source = f"open({str(marker)!r}, 'w').write('x')\n"
+    assert operator.put("/api/programs/p.py", json={"source": source}).status_code == 200
+    assert not marker.exists()
+
+
+@pytest.mark.parametrize(
+    "name, status",
+    [
+        ("..", 404),  # the client resolves it to /api: it never reaches the route
+        ("..%2F..%2Fetc%2Fpasswd", 404),
+        ("a..b", 422),
+        (".hidden", 422),
+        ("x" * 65, 422),
+        ("sp ace.py", 422),
+        ("-x.py", 422),
+        ("ok_name-1.py", 200),
+    ],
+)
+def test_program_names_are_checked(operator, name, status):
+    response = operator.put(f"/api/programs/{name}", json={"source": "pass\n"})
+    assert response.status_code == status, response.text
+    if status == 422:
+        assert response.json()["error"] == "bad_program_name"
+
+
+def test_oversized_binary_and_non_text_programs_are_refused(operator):
+    big = operator.put("/api/programs/big.py", json={"source": "#" * (256 * 1024 + 1)})
+    assert big.status_code == 413 and big.json()["error"] == "program_too_large"
+    binary = operator.put("/api/programs/bin.py", json={"source": "print(1)\n\x00\x01\x02"})
+    assert binary.status_code == 422 and binary.json()["error"] == "binary_program"
+    assert "line 2" in binary.json()["message"]
+    surrogate = operator.put(
+        "/api/programs/s.py",
+        content=b'{"source": "x = 1\\n\\ud800"}',
+        headers={"content-type": "application/json"},
+    )
+    assert surrogate.status_code == 422 and surrogate.json()["error"] in ("not_utf8", "invalid_request")
+    deep = operator.put("/api/programs/deep.py", json={"source": "x = " + "(" * 5000 + ")" * 5000 + "\n"})
+    assert deep.status_code == 422 and deep.json()["error"] in ("syntax_error", "program_too_complex")
+
+
+def test_malformed_requests_get_the_error_shape(operator):
+    broken = operator.put(
+        "/api/programs/a.py", content=b"{not json", headers={"content-type": "application/json"}
+    )
+    assert broken.status_code == 422 and broken.json()["error"] == "invalid_request"
+    assert "JSON" in broken.json()["message"]
+    missing = operator.put("/api/programs/a.py", json={"text": "x"})
+    assert missing.status_code == 422 and missing.json()["message"].startswith("source:")
+    wrong_method = operator.post("/api/programs/a.py", json={"source": "x"})
+    assert wrong_method.status_code == 405 and set(wrong_method.json()) >= {"error", "message"}
