@@ -20,6 +20,7 @@ from typing import Any
 
 from fastapi import FastAPI
 from fastapi.routing import APIRoute
+from fastapi.staticfiles import StaticFiles
 from fastapi_offline import FastAPIOffline
 from ulid import ULID
 
@@ -123,6 +124,8 @@ def create_app(config: DaemonConfig, services: Sequence[Service] | None = None) 
     errors.install(app)
     app.add_middleware(AuthMiddleware)
     app.include_router(pages.router)
+    if pages.ASSETS_DIR.is_dir():
+        app.mount("/assets", StaticFiles(directory=pages.ASSETS_DIR), name="assets")
     for router in ROUTERS:
         app.include_router(router, prefix="/api")
     check_mutating_routes(app)

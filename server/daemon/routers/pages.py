@@ -1,14 +1,20 @@
-"""The page at `/`: the browser console will live here; until then it says how to sign in and where the
-API is."""
+"""The browser console at `/`: the page built from `web/` into `openbricks_server/daemon/static` (by
+`make web`; shipped in the wheel), or, before the page is built or before signing in, a short page that
+says how to sign in and where the API is."""
 
 from __future__ import annotations
 
 from html import escape
+from pathlib import Path
 
 from fastapi import APIRouter, Request
-from fastapi.responses import HTMLResponse
+from fastapi.responses import FileResponse, HTMLResponse
 
 from openbricks import __version__
+
+STATIC_DIR = Path(__file__).resolve().parent.parent / "static"
+INDEX = STATIC_DIR / "index.html"
+ASSETS_DIR = STATIC_DIR / "assets"
 
 router = APIRouter(include_in_schema=False)
 
@@ -20,17 +26,20 @@ _PAGE = """<!doctype html>
 
 
 @router.get("/", response_class=HTMLResponse)
-async def landing(request: Request) -> HTMLResponse:
+async def landing(request: Request):
     caller = request.scope.get("state", {}).get("caller")
     if caller is None:
         body = (
             "<p>Not signed in. Open the address <code>openbricks console</code> printed in its terminal "
             "(it ends in <code>/?token=...</code>); the browser then keeps a sign-in cookie.</p>"
         )
+    elif INDEX.is_file():
+        return FileResponse(INDEX, headers={"cache-control": "no-cache"})
     else:
         body = (
             f"<p>Signed in as <b>{escape(caller.label)}</b> ({escape(caller.role)}).</p>"
-            "<p>The console's pages are coming. Meanwhile the whole API (hubs, programs, runs, the event "
-            'stream) is listed and can be tried at <a href="/docs">/docs</a>.</p>'
+            "<p>The console's pages are not built in this checkout (<code>make web</code> builds them). "
+            "The whole API (hubs, programs, runs, the event stream) is listed and can be tried at "
+            '<a href="/docs">/docs</a>.</p>'
         )
     return HTMLResponse(_PAGE.format(body=body, version=escape(__version__)))

@@ -12,6 +12,7 @@ import pytest
 from websockets.exceptions import InvalidStatus
 
 from openbricks_server.daemon.routers.events import COMMANDS
+from openbricks_server.daemon.routers.pages import INDEX
 
 MUTATING = {"post", "put", "patch", "delete"}
 
@@ -23,7 +24,13 @@ def test_the_printed_url_is_traded_for_an_httponly_strict_cookie_and_a_clean_url
         cookie = signed.headers["set-cookie"]
         assert "HttpOnly" in cookie and "SameSite=Strict" in cookie and daemon.token in cookie
         page = browser.get("/")
-        assert "Signed in as <b>local</b> (operator)" in page.text
+        if INDEX.is_file():  # the browser console, built by `make web`, with its assets
+            assert 'id="app"' in page.text
+            asset = re.search(r'src="\./(assets/[^"]+)"', page.text).group(1)
+            assert browser.get(f"/{asset}").status_code == 200
+            assert httpx.get(f"{daemon.url}/{asset}").status_code == 401  # not without signing in
+        else:
+            assert "Signed in as <b>local</b> (operator)" in page.text
         me = browser.get("/api/auth/me").json()
         assert me == {"label": "local", "role": "operator", "via": "cookie"}
         kept = browser.get(f"/docs?token={daemon.token}&x=1", follow_redirects=False)
