@@ -181,6 +181,16 @@ def _exception_line(exc):
     return type(exc).__name__ + (": " + text if text else "")
 
 
+def _advice(exc, free):
+    """What to do, after a traceback whose last line says too little to act on."""
+    if isinstance(exc, MemoryError):
+        return (
+            "the program ran out of memory (%s bytes were free when it started): build smaller lists and "
+            "buffers, drop what you no longer need (del, gc.collect()), or work in smaller pieces\n" % free
+        )
+    return ""
+
+
 def resolve_program(path=DEFAULT_PROGRAM_PATH):
     """The staged program to run: `path`, or its `.py`/`.mpy` sibling when only that one exists."""
     candidates = (path,)
@@ -438,7 +448,7 @@ class Launcher:
                 outcome = "error"
                 _set_running(False)
                 self._wind_down()  # before the traceback: printing it over BLE takes a while
-                text = traceback_text(exc)
+                text = traceback_text(exc) + _advice(exc, free)
                 log.console_print(text, end="")
                 log.write_text(text)
                 log.write_text("stopped: %s after %d ms" % (_exception_line(exc), self._elapsed_ms()))

@@ -7,11 +7,13 @@ Every user-caused failure ends as one clear line on stderr and a non-zero status
 
 import argparse
 import importlib
+import math
 import sys
 
 from openbricks import __version__
 
 SCAN_TIMEOUT_S = 5.0
+PROBE_FIRST_SIZE = 256  # paste-probe's first size (commands/paste_probe.py takes it from here)
 
 # command -> module under openbricks_server.commands that implements main(args) -> exit status
 COMMANDS = {
@@ -30,10 +32,68 @@ COMMANDS = {
 }
 
 
+def seconds(text: str) -> float:
+    """A time option: a positive, finite number of seconds (0, -1, nan and inf are all mistakes)."""
+    value = _number(text, float, "a number of seconds such as 5 or 0.5")
+    if not (math.isfinite(value) and value > 0):
+        raise argparse.ArgumentTypeError(f"{text!r} seconds: give a positive number of seconds, e.g. 5")
+    return value
+
+
+def positive_int(text: str) -> int:
+    value = _number(text, int, "a whole number")
+    if value <= 0:
+        raise argparse.ArgumentTypeError(f"{text!r}: give a whole number above 0")
+    return value
+
+
+def pin(text: str) -> int:
+    value = _number(text, int, "a GPIO number")
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"{text!r}: GPIO numbers start at 0")
+    return value
+
+
+def probe_size(text: str) -> int:
+    """paste-probe --max: below the first probe size there is nothing to measure."""
+    value = _number(text, int, "a size in bytes")
+    if value < PROBE_FIRST_SIZE:
+        raise argparse.ArgumentTypeError(
+            f"{value} bytes: the probe starts at {PROBE_FIRST_SIZE} bytes; "
+            f"give --max {PROBE_FIRST_SIZE} or more"
+        )
+    return value
+
+
+def run_index(text: str) -> int:
+    value = _number(text, int, "a run number from `openbricks log --list`")
+    if value < 0:
+        raise argparse.ArgumentTypeError(
+            f"there is no run {value}: runs are numbered from 0 (a hub's first run) upward; "
+            "`--list` shows the ones kept"
+        )
+    return value
+
+
+def hub_name(text: str) -> str:
+    if not text.strip():
+        raise argparse.ArgumentTypeError(
+            "the hub name is empty: give the name set at flash time, e.g. -n RobotA"
+        )
+    return text
+
+
+def _number(text: str, kind, what: str):
+    try:
+        return kind(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not {what}") from None
+
+
 def _scan_timeout(parser, what="How long to look for the named hub before giving up"):
     parser.add_argument(
         "--scan-timeout",
-        type=float,
+        type=seconds,
         default=SCAN_TIMEOUT_S,
         metavar="SCAN_TIMEOUT",
         help=f"{what}, in seconds. Default: %(default)s.",
@@ -43,7 +103,7 @@ def _scan_timeout(parser, what="How long to look for the named hub before giving
 def _hub_name(
     parser, required=True, text="Name of the hub, as given at flash time (`openbricks flash --name`)."
 ):
-    parser.add_argument("-n", "--name", required=required, help=text)
+    parser.add_argument("-n", "--name", type=hub_name, required=required, help=text)
 
 
 def _add_flash(sub):
@@ -74,10 +134,16 @@ def _add_flash(sub):
         ),
     )
     p.add_argument(
-        "--chip", default="auto", help="Chip type for esptool: esp32, esp32s3 or auto. Default: %(default)s."
+        "--chip",
+        default="auto",
+        choices=("auto", "esp32", "esp32s3"),
+        help="Chip type for esptool: esp32, esp32s3 or auto. Default: %(default)s.",
     )
     p.add_argument(
-        "--baud", type=int, default=460800, help="Baud rate for writing the flash. Default: %(default)s."
+        "--baud",
+        type=positive_int,
+        default=460800,
+        help="Baud rate for writing the flash. Default: %(default)s.",
     )
     p.add_argument(
         "--with-qtr-init",
@@ -183,7 +249,7 @@ def _add_list(sub):
         ),
     )
     p.add_argument(
-        "--timeout", type=float, default=SCAN_TIMEOUT_S, help="Scan time in seconds. Default: %(default)s."
+        "--timeout", type=seconds, default=SCAN_TIMEOUT_S, help="Scan time in seconds. Default: %(default)s."
     )
     p.add_argument(
         "--all",
@@ -205,7 +271,7 @@ def _add_log(sub):
     )
     _hub_name(p)
     p.add_argument("--list", action="store_true", help="List the runs on the hub with their sizes instead.")
-    p.add_argument("--run", type=int, help="Index of the run to show. Default: the most recent.")
+    p.add_argument("--run", type=run_index, help="Index of the run to show. Default: the most recent.")
     _scan_timeout(p)
     return p
 
@@ -230,12 +296,14 @@ def _add_servo_id(sub):
         "--port",
         help="Serial port of the USB adapter. Omit (without -n) to use the only USB serial device connected.",
     )
-    where.add_argument("-n", "--name", help="Go through this hub instead of a USB adapter. Not with -p.")
-    p.add_argument(
-        "--tx", type=int, default=14, help="Through a hub only: servo bus TX pin. Default: %(default)s."
+    where.add_argument(
+        "-n", "--name", type=hub_name, help="Go through this hub instead of a USB adapter. Not with -p."
     )
     p.add_argument(
-        "--rx", type=int, default=41, help="Through a hub only: servo bus RX pin. Default: %(default)s."
+        "--tx", type=pin, default=14, help="Through a hub only: servo bus TX pin. Default: %(default)s."
+    )
+    p.add_argument(
+        "--rx", type=pin, default=41, help="Through a hub only: servo bus RX pin. Default: %(default)s."
     )
     _scan_timeout(p, "Through a hub only: how long to look for it")
     p.add_argument("--scan", action="store_true", help="Only list the ids that answer; change nothing.")
@@ -247,11 +315,14 @@ def _add_servo_id(sub):
         ),
     )
     p.add_argument(
-        "--baudrate", type=int, default=1000000, help="Bus baud rate. Default: %(default)s (factory)."
+        "--baudrate",
+        type=positive_int,
+        default=1000000,
+        help="Bus baud rate. Default: %(default)s (factory).",
     )
     p.add_argument(
         "--timeout",
-        type=float,
+        type=seconds,
         default=0.02,
         help="How long to wait for each servo's answer, in seconds. Default: %(default)s (full scan: ~5 s).",
     )
@@ -272,10 +343,13 @@ def _add_paste_probe(sub):
     _hub_name(p)
     _scan_timeout(p)
     p.add_argument(
-        "--max", type=int, default=8192, help="Largest size to try, in bytes. Default: %(default)s."
+        "--max", type=probe_size, default=8192, help="Largest size to try, in bytes. Default: %(default)s."
     )
     p.add_argument(
-        "--timeout", type=float, default=15.0, help="Time allowed per size, in seconds. Default: %(default)s."
+        "--timeout",
+        type=seconds,
+        default=15.0,
+        help="Time allowed per size, in seconds. Default: %(default)s.",
     )
     return p
 
@@ -417,11 +491,15 @@ def main(argv: list[str] | None = None) -> int:
 
 
 def _dispatch(command: str, args) -> int:
-    from openbricks_server.errors import EXIT_INTERRUPTED, CliError
+    from openbricks_server.errors import EXIT_INTERRUPTED, CliError, UsageError
 
     try:
         module = importlib.import_module(f"openbricks_server.commands.{COMMANDS[command]}")
         return module.main(args)
+    except UsageError as exc:  # found after parsing, reported as argparse reports its own
+        args.command_parser.print_usage(sys.stderr)
+        print(f"openbricks {command}: error: {exc}", file=sys.stderr)
+        return exc.exit_status
     except CliError as exc:
         print(f"openbricks {command}: error: {exc}", file=sys.stderr)
         return exc.exit_status

@@ -49,15 +49,19 @@ class Program:
 def read_program(path: str | os.PathLike) -> Program:
     """Read and check a program file: it must exist, be UTF-8 text and fit on a hub."""
     path = Path(path)
+    return Program(path.name, _decode(read_file(path), str(path)))
+
+
+def read_file(path: Path) -> bytes:
+    """The bytes of a file the user named; ProgramError saying what is wrong with the path."""
     try:
-        data = path.read_bytes()
+        return path.read_bytes()
     except FileNotFoundError:
         raise ProgramError(f"{path}: no such file; check the path (relative to {Path.cwd()})") from None
     except IsADirectoryError:
-        raise ProgramError(f"{path} is a folder: give the program's .py file") from None
+        raise ProgramError(f"{path} is a folder: give the program's file") from None
     except OSError as exc:
         raise ProgramError(f"{path}: cannot read it ({exc.strerror})") from None
-    return Program(path.name, _decode(data, str(path)))
 
 
 def code_program(code: str) -> Program:
@@ -68,13 +72,20 @@ def code_program(code: str) -> Program:
 def _decode(data: bytes, where: str) -> str:
     check_size(len(data), f"{where} is")
     try:
-        return data.decode("utf-8")
+        text = data.decode("utf-8")
     except UnicodeDecodeError as exc:
         line = data[: exc.start].count(b"\n") + 1
         raise ProgramError(
             f"{where}, line {line}: byte 0x{data[exc.start]:02x} is not UTF-8 text; MicroPython reads source "
             "as UTF-8, so save the file with UTF-8 encoding"
         ) from None
+    if "\x00" in text:
+        line = text[: text.index("\x00")].count("\n") + 1
+        raise ProgramError(
+            f"{where}, line {line}: a NUL byte (0x00), which program text never contains: is it a binary "
+            "file? Give the program's .py source"
+        )
+    return text
 
 
 def check_size(size: int, what: str, limit: int = MAX_PROGRAM_BYTES) -> None:
@@ -115,15 +126,33 @@ def compile_program(program: Program) -> Program:
 
 
 def render_compile_error(program: Program, stderr: str) -> str:
-    """mpy-cross's report as `file:line: SyntaxError: message` and the quoted source line."""
+    """mpy-cross's verdict as `file:line: SyntaxError: message`, the quoted line and a caret.
+
+    mpy-cross says only "invalid syntax" and gives no column (and for an unclosed bracket names the
+    line after the end), so the place and the wording come from Python's own parser when it finds an
+    error too; when it does not, the syntax is valid Python that MicroPython lacks, and the message says so.
+    """
     lines = [line for line in stderr.strip().splitlines() if line.strip()]
     message = lines[-1].strip() if lines else "mpy-cross failed without a message"
     where = _ERROR_LOCATION.search(stderr)
-    if where is None:
-        return f"{program.filename}: {message}"
-    number = int(where.group("line"))
     source_lines = program.source.splitlines()
+    column = None
+    try:
+        compile(program.source, program.filename, "exec", dont_inherit=True)
+    except SyntaxError as exc:
+        number, column = exc.lineno or 0, exc.offset
+        message = f"{type(exc).__name__}: {exc.msg}"
+    else:
+        if where is None:
+            return f"{program.filename}: {message}"
+        number = min(int(where.group("line")), max(len(source_lines), 1))
+        message += " (this is valid desktop Python, but MicroPython does not support it)"
     text = f"{program.filename}:{number}: {message}"
     if 1 <= number <= len(source_lines):
-        text += f"\n    {number} | {source_lines[number - 1].rstrip()}"
+        line = source_lines[number - 1].rstrip()
+        gutter = f"    {number} | "
+        text += f"\n{gutter}{line.expandtabs(4)}"
+        if column and column >= 1:
+            indent = len(line[: column - 1].expandtabs(4))
+            text += "\n" + " " * (len(gutter) - 2) + "| " + " " * indent + "^"
     return text

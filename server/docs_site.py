@@ -13,7 +13,7 @@ import re
 import sys
 from pathlib import Path
 
-from openbricks_server.errors import CliError
+from openbricks_server.errors import CliError, UsageError
 from openbricks_server.paths import docs_cache_dir
 
 DOCS_DIR_ENV = "OPENBRICKS_DOCS_DIR"
@@ -53,7 +53,7 @@ def page_for(topic: str | None) -> Path:
     if wanted not in available:
         close = difflib.get_close_matches(wanted, available, n=3)
         hint = f"did you mean {', '.join(close)}? " if close else ""
-        raise CliError(f"no docs page {topic!r}; {hint}pages: {', '.join(available)}")
+        raise UsageError(f"no docs page {topic!r}; {hint}pages: {', '.join(available)}")
     out = docs_cache_dir()
     for name in available:
         _render_if_stale(folder / f"{name}.md", out / f"{name}.html")

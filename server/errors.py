@@ -2,6 +2,8 @@
 
 Anything a user can cause (a wrong name, a missing file, a busy hub, a dropped link) is raised as a
 ``CliError``: the CLI prints its message as one clear line and exits with its status, never a traceback.
+A ``UsageError`` is a wrong argument found after parsing (a servo id out of range, a bad hub path): it
+exits 2 with the command's usage line, exactly like the errors argparse finds itself.
 """
 
 from __future__ import annotations
@@ -21,3 +23,9 @@ class CliError(Exception):
         super().__init__(message)
         if exit_status is not None:
             self.exit_status = exit_status
+
+
+class UsageError(CliError):
+    """A wrong argument: the command could never succeed with it, whatever the hub or the bus says."""
+
+    exit_status = EXIT_USAGE

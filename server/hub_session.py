@@ -85,12 +85,28 @@ async def open_link(name: str, scan_timeout_s: float):
         raise CliError(f"{exc}{extra}") from None
     except Exception as exc:  # noqa: BLE001 - no adapter, no D-Bus, radio off: all mean "no BLE"
         others = _virtual_names()
-        seen = ", ".join(others) if others else "none"
+        seen = ", ".join(others) if others else "none running"
         raise CliError(
-            f"no hub named {name!r}: it is not a virtual hub running here (virtual hubs: {seen}) and "
-            f"Bluetooth is unavailable ({type(exc).__name__}: {exc}); switch Bluetooth on, or check the name"
+            f"no hub named {name!r} was found: it is not one of the virtual hubs on this computer "
+            f"({seen}), and Bluetooth is unavailable on this computer ({bluetooth_unavailable(exc)}), so "
+            "no real hub could be looked for; switch Bluetooth on, or check the name"
         ) from None
     return BleLink(name, device=advert.device, connect_timeout_s=CONNECT_TIMEOUT_S), False
+
+
+def bluetooth_unavailable(exc: Exception) -> str:
+    """Why a scan could not start, in words for the person at the table; the Bluetooth stack's own
+    exception names say nothing to them."""
+    text = str(exc).lower()
+    if isinstance(exc, (FileNotFoundError, ConnectionRefusedError)):
+        return "the system's Bluetooth service is not running"
+    if isinstance(exc, PermissionError):
+        return "this user may not use Bluetooth"
+    if "adapter" in text:
+        return "no Bluetooth adapter was found"
+    if "powered" in text or "turned off" in text:
+        return "the Bluetooth radio is switched off"
+    return str(exc) or "the Bluetooth stack gave no reason"
 
 
 def _packet_dump(data: bytes) -> None:

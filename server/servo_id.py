@@ -15,7 +15,7 @@ from __future__ import annotations
 import time
 from dataclasses import dataclass
 
-from openbricks_server.errors import CliError
+from openbricks_server.errors import CliError, UsageError
 
 FIRST_ID = 0
 LAST_ID = 253
@@ -28,7 +28,7 @@ class ServoIdError(CliError):
 
 def check_id(option: str, value: int | None) -> None:
     if value is not None and not FIRST_ID <= value <= LAST_ID:
-        raise ServoIdError(
+        raise UsageError(
             f"{option} {value}: servo bus ids are {FIRST_ID}..{LAST_ID} (254 is the broadcast id)"
         )
 
@@ -55,9 +55,9 @@ class UsbServoBus:
         try:
             self.serial = serial.Serial(port, baudrate, timeout=min(timeout_s, 0.01))
         except (serial.SerialException, OSError) as exc:
-            raise ServoIdError(
-                f"cannot open {port} ({exc}); check the port name and your permissions"
-            ) from None
+            from openbricks_server.flash.ports import port_problem
+
+            raise ServoIdError(f"cannot open {port}: {port_problem(port, exc)}") from None
 
     def close(self) -> None:
         self.serial.close()

@@ -11,6 +11,7 @@ from __future__ import annotations
 import sys
 
 from openbricks_server.compile import Program, ProgramError, check_size, compile_program
+from openbricks_server.link import HubCallError
 
 SOURCE_PROGRAM_PATH = "/program.py"
 MPY_MAJOR = 6  # the .mpy format our mpy-cross writes (byte 1 of the file)
@@ -38,8 +39,27 @@ async def stage(session, program: Program, path: str | None = None) -> str:
             check_size(len(data), f"{program.filename} is", info.max_program_bytes)
         except ProgramError as exc:
             raise ProgramError(f"{exc} (the limit of {session.name})") from None
-    await session.repl.put(target, data)
+    try:
+        await session.repl.put(target, data)
+    except HubCallError as exc:
+        raise ProgramError(
+            f"{session.name} could not store {target}: {_storage_problem(target, exc)}"
+        ) from None
     return target
+
+
+def _storage_problem(path: str, exc: HubCallError) -> str:
+    """The hub's file error (MicroPython names only the errno) as what to change."""
+    folder = path.rsplit("/", 1)[0] or "/"
+    if "ENOENT" in exc.error:
+        return f"there is no folder {folder} on the hub; store it in an existing folder such as /"
+    if "ENOTDIR" in exc.error:
+        return f"part of {folder} is a file on the hub, not a folder"
+    if "EISDIR" in exc.error:
+        return f"{path} is a folder on the hub; name a file inside it, e.g. {path}/tools.py"
+    if "ENOSPC" in exc.error:
+        return "the hub's flash is full; remove files you no longer need, or store a smaller file"
+    return exc.error
 
 
 def prepare(program: Program) -> Program:

@@ -16,6 +16,7 @@ from __future__ import annotations
 import argparse
 import importlib.util
 import json
+import math
 import sys
 import time
 
@@ -63,6 +64,24 @@ class SimCliError(Exception):
     """A user error: printed as one line, exit status 1."""
 
 
+def _positive(text: str) -> float:
+    """Seconds or a speed factor: positive and finite (0, negatives, nan and inf are mistakes)."""
+    value = _finite(text)
+    if value <= 0:
+        raise argparse.ArgumentTypeError(f"{text!r}: give a positive number, e.g. 2 or 0.5")
+    return value
+
+
+def _finite(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+    if not math.isfinite(value):
+        raise argparse.ArgumentTypeError(f"{text!r}: give a finite number")
+    return value
+
+
 def _start_options(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--world", default="empty", help=f"World name ({WORLD_NAMES}) or an MJCF file. Default: %(default)s."
@@ -70,11 +89,15 @@ def _start_options(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--chassis", default="st3032", choices=CHASSIS_NAMES, help="Robot build. Default: %(default)s."
     )
-    parser.add_argument("--x", type=float, help="Start x on the mat, in metres. Default: the world's start.")
-    parser.add_argument("--y", type=float, help="Start y on the mat, in metres. Default: the world's start.")
+    parser.add_argument(
+        "--x", type=_finite, help="Start x on the mat, in metres. Default: the world's start."
+    )
+    parser.add_argument(
+        "--y", type=_finite, help="Start y on the mat, in metres. Default: the world's start."
+    )
     parser.add_argument(
         "--yaw",
-        type=float,
+        type=_finite,
         help="Start heading, degrees counter-clockwise from +x. Default: the world's start.",
     )
     parser.add_argument(
@@ -105,7 +128,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     preview.add_argument(
         "--duration",
-        type=float,
+        type=_positive,
         default=2.0,
         help="Seconds of physics with --headless. Default: %(default)s.",
     )
@@ -131,12 +154,12 @@ def build_parser() -> argparse.ArgumentParser:
     )
     run.add_argument(
         "--speed",
-        type=float,
+        type=_positive,
         help="Pace the run at this multiple of real time (1 = real time). Default: unpaced.",
     )
     run.add_argument(
         "--duration",
-        type=float,
+        type=_positive,
         default=60.0,
         help="Simulated seconds before the run is cut off (exit time_limit). Default: %(default)s.",
     )
@@ -269,8 +292,6 @@ def _preview(args) -> int:
             launch(world=world, chassis=args.chassis, seed=args.seed, start_mm_deg=_start_pose(args, world))
             or 0
         )
-    if args.duration <= 0:
-        raise SimCliError(f"--duration {args.duration:g}: give a positive number of seconds")
     from openbricks_sim.physics import Physics
 
     physics = Physics(world, args.chassis, args.seed, _start_pose(args, world))
@@ -292,14 +313,15 @@ def _run(args) -> int:
     from pathlib import Path
 
     script = Path(args.script)
+    if script.is_dir():
+        raise SimCliError(f"{script} is a folder: give the program's .py file")
     if not script.is_file():
         raise SimCliError(f"{script}: no such program file")
     try:
         source = script.read_text(encoding="utf-8")
     except UnicodeDecodeError as exc:
         raise SimCliError(f"{script} is not UTF-8 text ({exc.reason} at byte {exc.start})") from None
-    if args.duration <= 0:
-        raise SimCliError(f"--duration {args.duration:g}: give a positive number of seconds")
+    _check_syntax(source, script.name)
     if args.viewer and _viewer_launcher() is None:
         raise SimCliError(VIEWER_UNAVAILABLE)
     world = _world(args.world)
@@ -312,6 +334,20 @@ def _run(args) -> int:
     except HubDirError as exc:
         raise SimCliError(str(exc)) from None
     return _run_contained(args, world, script)
+
+
+def _check_syntax(source: str, filename: str) -> None:
+    """A syntax error as Python shows one (file, line, the line, a caret), before any world is built."""
+    import traceback
+
+    if "\x00" in source:
+        raise SimCliError(
+            f"{filename} contains a NUL byte (0x00), which program text never does: is it binary?"
+        )
+    try:
+        compile(source, filename, "exec", dont_inherit=True)
+    except SyntaxError as exc:
+        raise SimCliError("".join(traceback.format_exception_only(exc)).rstrip()) from None
 
 
 def _run_contained(args, world, script) -> int:

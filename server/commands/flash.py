@@ -14,10 +14,10 @@ import asyncio
 from pathlib import Path
 
 from openbricks_server.console import ProgressBar, Steps, confirm
-from openbricks_server.errors import EXIT_OK, CliError
+from openbricks_server.errors import EXIT_OK, CliError, UsageError
 from openbricks_server.flash.esptool_runner import Esptool, chip_name
 from openbricks_server.flash.image import FirmwareImage, ImageError, inspect_image, parse_version
-from openbricks_server.flash.ports import find_esp_port
+from openbricks_server.flash.ports import find_esp_port, missing_port
 from openbricks_server.flash.signing import public_key_path, signature_path, verify_file
 from openbricks_server.hub_lock import hub_lock
 
@@ -30,15 +30,15 @@ QTR_PATH = "/qtr.cal"
 def validate_hub_name(name: str) -> str:
     stripped = name.strip()
     if not stripped:
-        raise CliError("--name is empty: give the hub a name you will use with `-n`, e.g. --name RobotA")
+        raise UsageError("--name is empty: give the hub a name you will use with `-n`, e.g. --name RobotA")
     if stripped != name:
-        raise CliError(
+        raise UsageError(
             f"--name {name!r} starts or ends with spaces; hubs are found by exact name, so drop them"
         )
     if any(not ch.isprintable() for ch in name):
-        raise CliError(f"--name {name!r} contains control characters; use letters, digits, - or _")
+        raise UsageError(f"--name {name!r} contains control characters; use letters, digits, - or _")
     if len(name.encode("utf-8")) > MAX_NAME_BYTES:
-        raise CliError(
+        raise UsageError(
             f"--name {name!r} is {len(name.encode('utf-8'))} bytes; a Bluetooth advertisement carries "
             f"at most {MAX_NAME_BYTES}: pick a shorter name"
         )
@@ -47,18 +47,23 @@ def validate_hub_name(name: str) -> str:
 
 def main(args) -> int:
     name = validate_hub_name(args.name)
+    # A given image is checked before any port is opened: a typo in the path is known at once.
+    given = inspect_image(args.firmware) if args.firmware else None
     steps = Steps(args.verbose)
     if len(name) > RECOMMENDED_NAME_CHARS:
         steps.note(
             f"note: names of {RECOMMENDED_NAME_CHARS} characters or fewer show in full in every scanner"
         )
+    problem = missing_port(args.port) if args.port else None
+    if problem:
+        raise CliError(f"--port {args.port}: {problem}")
     port = args.port or find_esp_port()
     steps.step(f"port {port}" + ("" if args.port else " (the only ESP device connected)"))
     with hub_lock(name):
-        return _flash(args, name, port, steps)
+        return _flash(args, name, port, steps, given)
 
 
-def _flash(args, name: str, port: str, steps: Steps) -> int:
+def _flash(args, name: str, port: str, steps: Steps, given: FirmwareImage | None) -> int:
     from openbricks_server import hub_session
 
     steps.step("firmware on the hub")
@@ -77,7 +82,7 @@ def _flash(args, name: str, port: str, steps: Steps) -> int:
             f"--chip {args.chip} was given, but the board on {port} is an {chip}: drop --chip or fix it"
         )
 
-    image, release_note = _pick_image(args, chip, steps)
+    image, release_note = (given, "") if given is not None else _newest_release(chip, steps)
     if image.chip != chip:
         raise ImageError(
             f"{image.path.name} is built for {image.chip} but the board on {port} is an {chip}: flashing "
@@ -115,9 +120,7 @@ def _flash(args, name: str, port: str, steps: Steps) -> int:
     return EXIT_OK
 
 
-def _pick_image(args, chip: str, steps: Steps) -> tuple[FirmwareImage, str]:
-    if args.firmware:
-        return inspect_image(args.firmware), ""
+def _newest_release(chip: str, steps: Steps) -> tuple[FirmwareImage, str]:
     from openbricks_server.flash.releases import newest_release, releases_url
 
     steps.step(f"newest release for {chip}")

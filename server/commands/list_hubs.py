@@ -37,8 +37,11 @@ def main(args) -> int:
     try:
         devices = asyncio.run(_ble_devices(args.timeout))
     except Exception as exc:  # noqa: BLE001 - no adapter / no D-Bus / radio off: all mean "no scan"
+        from openbricks_server.hub_session import bluetooth_unavailable
+
         print(
-            f"Bluetooth scan unavailable ({type(exc).__name__}: {exc}); listing virtual hubs only",
+            f"Bluetooth is unavailable on this computer ({bluetooth_unavailable(exc)}); listing virtual "
+            "hubs only",
             file=sys.stderr,
         )
         devices = []

@@ -10,8 +10,25 @@ from openbricks_server.hub_session import with_hub
 from openbricks_server.logview import LogRenderer
 
 
+def _span(indices: list[int]) -> str:
+    if indices == list(range(indices[0], indices[-1] + 1)) and len(indices) > 2:
+        return f"{indices[0]}..{indices[-1]}"
+    return ", ".join(str(i) for i in indices)
+
+
+def missing_run(name: str, index: int, indices: list[int], slots: int) -> str:
+    """Why run `index` can't be shown: never happened, overwritten, or lost; with what can be shown."""
+    kept = f"runs you can show: {_span(indices)}"
+    if index > indices[-1]:
+        return f"{name} has no run {index}: no such run exists yet (the newest is run {indices[-1]}); {kept}"
+    if index < indices[0]:
+        return f"run {index} of {name} was overwritten: a hub keeps only its last {slots} runs; {kept}"
+    return f"{name} has no log of run {index} (its slot was reused or removed); {kept}"
+
+
 async def _talk(session, args):
-    runs = (await session.call("runs"))["runs"]
+    listing = await session.call("runs")
+    runs = listing["runs"]
     if args.list:
         if not runs:
             print(f"{session.name} has no run logs yet")
@@ -23,10 +40,7 @@ async def _talk(session, args):
         raise CliError(f"{session.name} has no run logs yet: runs are logged when a program runs")
     index = indices[-1] if args.run is None else args.run
     if index not in indices:
-        raise CliError(
-            f"{session.name} has no log of run {index} (kept: {', '.join(str(i) for i in indices)}); older "
-            "runs were overwritten"
-        )
+        raise CliError(missing_run(session.name, index, indices, listing.get("slots", len(indices))))
     out = sys.stdout
     renderer = LogRenderer(out.write)
     offset = 0

@@ -12,12 +12,11 @@ from __future__ import annotations
 import asyncio
 import time
 
+from openbricks_server.cli import PROBE_FIRST_SIZE
 from openbricks_server.errors import EXIT_FAILED, EXIT_OK, CliError
 from openbricks_server.hub_session import hub_exception_message, with_hub
 from openbricks_server.link import HubException, LinkTimeout
 from openbricks_server.link.host_call import Command, command
-
-FIRST_SIZE = 256
 
 
 def probe_command(size: int, token: str) -> tuple[Command, int]:
@@ -29,7 +28,7 @@ def probe_command(size: int, token: str) -> tuple[Command, int]:
 
 
 def sizes(max_bytes: int) -> list[int]:
-    out, size = [], FIRST_SIZE
+    out, size = [], PROBE_FIRST_SIZE
     while size < max_bytes:
         out.append(size)
         size *= 2

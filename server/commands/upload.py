@@ -6,8 +6,8 @@ import asyncio
 import sys
 from pathlib import Path
 
-from openbricks_server.compile import Program, ProgramError, check_size, read_program
-from openbricks_server.errors import EXIT_OK
+from openbricks_server.compile import Program, check_size, read_file, read_program
+from openbricks_server.errors import EXIT_OK, UsageError
 from openbricks_server.hub_session import with_hub
 from openbricks_server.staging import prepare, stage
 
@@ -15,18 +15,28 @@ from openbricks_server.staging import prepare, stage
 def _verbatim(path: str) -> Program:
     """--path: the file's bytes as they are; it may be data, so only existence and size are checked."""
     source = Path(path)
-    try:
-        data = source.read_bytes()
-    except OSError as exc:
-        raise ProgramError(f"{source}: cannot read it ({exc.strerror})") from None
+    data = read_file(source)
     check_size(len(data), f"{source} is")
     return Program(source.name, data.decode("utf-8", "surrogateescape"))
 
 
+def check_hub_path(path: str) -> None:
+    """--path names one file on the hub's flash, absolutely; the hub refuses anything else anyway."""
+    parts = path.split("/")[1:]
+    if not path.startswith("/") or path.endswith("/"):
+        problem = "give an absolute hub file path"
+    elif any(part in ("", ".", "..") for part in parts):
+        problem = "empty, '.' and '..' parts are not allowed; write the path out"
+    elif any(not ch.isprintable() for ch in path):
+        problem = "it contains control characters"
+    else:
+        return
+    raise UsageError(f"--path {path!r}: {problem}, such as /lib/tools.py")
+
+
 def main(args) -> int:
     if args.path is not None:
-        if not args.path.startswith("/") or args.path.endswith("/"):
-            raise ProgramError(f"--path {args.path!r}: give an absolute hub file path such as /lib/tools.py")
+        check_hub_path(args.path)
         program = _verbatim(args.script)
     else:
         program = prepare(read_program(args.script))

@@ -65,7 +65,9 @@ def inspect_image(path: str | Path) -> FirmwareImage:
     try:
         data = path.read_bytes()
     except FileNotFoundError:
-        raise ImageError(f"{path}: no such firmware file") from None
+        raise ImageError(f"{path}: no such firmware file; check the path given to --firmware") from None
+    except IsADirectoryError:
+        raise ImageError(f"{path} is a folder: give the firmware .bin file itself") from None
     except OSError as exc:
         raise ImageError(f"{path}: cannot read it ({exc.strerror})") from None
     return inspect_bytes(data, path)

@@ -6,6 +6,7 @@ user is told what was seen and asked for --port.
 
 from __future__ import annotations
 
+import os
 from dataclasses import dataclass
 
 from openbricks_server.errors import CliError
@@ -53,3 +54,24 @@ def pick_port(
 
 def find_esp_port() -> str:
     return pick_port(connected_ports(), ESP_USB_VENDORS, "ESP32 board")
+
+
+def missing_port(port: str) -> str | None:
+    """Why `port` cannot be a serial port, checked without opening it: None when it may be one. Only
+    POSIX ports are paths; COM5 is checked by opening it."""
+    if os.name != "posix" or os.path.exists(port):
+        return None
+    usb = [p.device for p in connected_ports() if p.vid is not None]
+    return f"there is no such port (USB serial ports here: {', '.join(usb) or 'none'})"
+
+
+def port_problem(port: str, exc: Exception) -> str:
+    """Why a serial port did not open, said plainly (pyserial's text repeats errno twice)."""
+    missing = missing_port(port)
+    if missing:
+        return missing
+    if isinstance(exc, PermissionError) or "permission" in str(exc).lower():
+        return "permission denied; add your user to the group that owns it (dialout on Linux)"
+    if "busy" in str(exc).lower():
+        return "another program has it open; close it (a serial monitor?) and retry"
+    return "it is not a serial port this computer can open; check the port name"

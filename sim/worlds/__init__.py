@@ -72,6 +72,14 @@ def resolve(name_or_path: str) -> World:
     if path.suffix.lower() == ".xml" or path.exists():
         if not path.is_file():
             raise UnknownWorldError(f"world file {path} does not exist")
+        if path.suffix.lower() != ".xml":
+            raise UnknownWorldError(
+                f"world file {path} is not an MJCF model: give an .xml file, or a world name"
+            )
+        try:
+            mujoco.MjSpec.from_file(str(path))
+        except ValueError as exc:  # MuJoCo's parser: the file, line and what is wrong
+            raise UnknownWorldError(f"world file {path} is not a model MuJoCo can load: {exc}") from None
         return World(path.stem, f"MJCF file {path}", lambda _seed: mujoco.MjSpec.from_file(str(path)))
     known = ", ".join(sorted(WORLDS))
     raise UnknownWorldError(f"unknown world {name_or_path!r}: use one of {known}, or a path to an MJCF file")

@@ -39,7 +39,7 @@ def test_a_topic_opens_its_page_and_a_typo_gets_suggestions(tmp_path):
     assert done.returncode == 0 and opened[0].endswith("/install.html")
     assert "openbricks flash --name RobotA" in Path(opened[0].removeprefix("file://")).read_text()
     done, opened = run_docs(tmp_path, "simulater")
-    assert done.returncode == 1 and opened == []
+    assert done.returncode == 2 and opened == []  # a wrong argument
     assert "no docs page 'simulater'; did you mean simulator?" in done.stderr
     assert "Traceback" not in done.stderr
 

@@ -59,7 +59,7 @@ def test_an_empty_bus_and_bad_ids_are_user_errors(rig):
     done = servo_id(rig.port, "3")
     assert done.returncode == 1 and "no servo answers on the bus" in done.stderr
     done = servo_id(rig.port, "254")
-    assert done.returncode == 1 and "new id 254: servo bus ids are 0..253" in done.stderr
+    assert done.returncode == 2 and "new id 254: servo bus ids are 0..253" in done.stderr  # a usage error
     assert "Traceback" not in done.stderr
 
 

@@ -23,5 +23,5 @@ def test_scan_and_re_id_through_the_hub(env):
 
 def test_bad_ids_are_refused_before_connecting(env):
     done = cli(env, "servo-id", "-n", "RobotA", "300")
-    assert done.returncode == 1 and "servo bus ids are 0..253" in done.stderr
+    assert done.returncode == 2 and "servo bus ids are 0..253" in done.stderr
     assert cli(env, "servo-id", "-n", "RobotA").returncode == 2  # neither NEW_ID nor --scan

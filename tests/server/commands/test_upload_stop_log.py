@@ -33,7 +33,7 @@ def test_upload_path_stores_the_file_verbatim(env, hub, tmp_path):
     assert done.returncode == 0, done.stderr
     assert hub.flash_file("/settings.json") == b'{"speed": 300}\n'
     done = cli(env, "upload", "-n", "RobotA", "--path", "relative.txt", str(data))
-    assert done.returncode == 1 and "absolute hub file path" in done.stderr
+    assert done.returncode == 2 and "absolute hub file path" in done.stderr
 
 
 def test_stop_ends_a_button_started_program(env, hub, tmp_path):
@@ -65,4 +65,7 @@ def test_log_list_and_a_chosen_run_with_local_time_stamps(env):
 
     assert stamp[:10] == local_time(int(time.time() * 1000))[:10]
     missing = cli(env, "log", "-n", "RobotA", "--run", "99999")
-    assert missing.returncode == 1 and "has no log of run 99999 (kept:" in missing.stderr
+    assert (
+        missing.returncode == 1
+        and f"has no run 99999: no such run exists yet (the newest is run {newest})" in missing.stderr
+    )

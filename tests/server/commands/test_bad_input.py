@@ -1,0 +1,410 @@
+"""The bad-input catalogue: every command of the `openbricks` CLI fed what people really type wrong.
+
+Each case runs the real CLI in its own process, against a real virtual hub where a hub is needed,
+and checks what the person at the terminal sees: the exit status the CLI documents (2 a wrong
+argument, 1 a failure; docs/cli.md, server/errors.py), the words that say what is wrong and how
+to fix it, and that nothing of the machinery leaks: no traceback, no internal exception names, no
+bare errno codes. A user's own program raising is the one place a traceback belongs; those cases
+say so.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import time
+from dataclasses import dataclass
+
+import pytest
+
+from .conftest import cli
+
+pytestmark = pytest.mark.e2e
+
+USAGE, FAILED = 2, 1
+HUB = "RobotA"
+OVERSIZED_BYTES = 300_000  # above the 256 KB a hub takes
+
+# What a person must never be shown: the CLI's insides.
+_TRACEBACK = re.compile(r"Traceback \(most recent call last\)|^\s+File \".*\", line \d+, in ", re.MULTILINE)
+_ERRNO = re.compile(r"\[Errno|\b(ENOENT|ENOTDIR|EISDIR|EACCES|ENOSPC|EEXIST|EINVAL|EIO|ENODEV)\b")
+_EXCEPTION_NAME = re.compile(r"\b[A-Z]\w*(?:Error|Exception)\b")
+# Exception names a user meets in their own program's terms: Python's syntax errors of their code,
+# and what their program raised on the hub.
+_USER_FACING = {"SyntaxError", "IndentationError", "TabError", "MemoryError"}
+
+
+@dataclass(frozen=True)
+class Case:
+    id: str
+    argv: tuple[str, ...]
+    status: int
+    words: tuple[str, ...]
+    program_error: bool = False  # the user's program raised: its own traceback is the point
+    answer_within_s: float | None = None  # refused before any port or hub is touched
+
+
+def case(id_, argv, status, *words, **options):
+    """`argv` as a string splits on spaces; a tuple keeps arguments that are empty or have spaces."""
+    argv = tuple(argv.split()) if isinstance(argv, str) else argv
+    return pytest.param(Case(id_, argv, status, words, **options), id=id_)
+
+
+CASES = [
+    # -- the command itself ------------------------------------------------------------------------
+    case("unknown-command", "bogus", USAGE, "invalid choice: 'bogus'", "run"),
+    case("unknown-option", "--nope", USAGE, "unrecognized arguments: --nope"),
+    # -- run: arguments --------------------------------------------------------------------------
+    case("run-without-name", "run {f}/ok.py", USAGE, "required: -n/--name"),
+    case("run-without-program", "run -n {hub}", USAGE, "give a SCRIPT to run, or code with -c"),
+    case(
+        "run-script-and-code", "run -n {hub} -c pass {f}/ok.py", USAGE, "either SCRIPT or -c CODE, not both"
+    ),
+    case("run-empty-hub-name", ("run", "-n", "", "-c", "pass"), USAGE, "hub name is empty", "-n RobotA"),
+    case(
+        "run-zero-scan-timeout", "run -n {hub} --scan-timeout 0 -c pass", USAGE, "positive number of seconds"
+    ),
+    case(
+        "run-nan-scan-timeout", "run -n {hub} --scan-timeout nan -c pass", USAGE, "positive number of seconds"
+    ),
+    case(
+        "run-word-scan-timeout", "run -n {hub} --scan-timeout soon -c pass", USAGE, "'soon' is not a number"
+    ),
+    case("run-code-without-value", "run -n {hub} -c", USAGE, "-c/--code: expected one argument"),
+    # -- run: the program file -------------------------------------------------------------------
+    case(
+        "run-missing-file",
+        "run -n {hub} {f}/missing.py",
+        FAILED,
+        "missing.py: no such file",
+        "check the path",
+    ),
+    case(
+        "run-folder", "run -n {hub} {f}/folder.py", FAILED, "folder.py is a folder", "give the program's file"
+    ),
+    case(
+        "run-binary-file",
+        "run -n {hub} {f}/picture.py",
+        FAILED,
+        "line 1: byte 0x89 is not UTF-8",
+        "UTF-8 encoding",
+    ),
+    case(
+        "run-latin-1-file", "run -n {hub} {f}/latin1.py", FAILED, "latin1.py, line 3: byte 0xe9 is not UTF-8"
+    ),
+    case("run-nul-byte", "run -n {hub} {f}/nul.py", FAILED, "nul.py, line 2: a NUL byte", "binary file"),
+    case(
+        "run-oversized",
+        "run -n {hub} {f}/big.py",
+        FAILED,
+        f"is {OVERSIZED_BYTES} bytes",
+        "up to 262144 bytes",
+    ),
+    case(
+        "run-unclosed-bracket",
+        "run -n {hub} {f}/bracket.py",
+        FAILED,
+        "bracket.py:2: SyntaxError: '(' was never closed\n    2 | x = (1,\n      |     ^",
+    ),
+    case(
+        "run-code-syntax-error",  # the right line (not the one after the end), quoted, with a caret
+        ("run", "-n", HUB, "-c", "print(1"),
+        FAILED,
+        "<code>:1: SyntaxError: '(' was never closed\n    1 | print(1\n      |      ^",
+    ),
+    case(
+        "run-indentation",
+        "run -n {hub} {f}/indent.py",
+        FAILED,
+        "indent.py:2: IndentationError: unexpected indent",
+    ),
+    case(
+        "run-open-string",
+        "run -n {hub} {f}/open_string.py",
+        FAILED,
+        "open_string.py:1: SyntaxError: unterminated string",
+    ),
+    case(
+        "run-desktop-only-syntax",
+        "run -n {hub} {f}/match.py",
+        FAILED,
+        "match.py:1: SyntaxError",
+        "valid desktop Python, but MicroPython does not support it",
+        "1 | match command:",
+    ),
+    # -- run: the hub ----------------------------------------------------------------------------
+    case("run-unknown-hub", "run -n Nope --scan-timeout 0.5 -c pass", FAILED, "no hub named 'Nope'", HUB),
+    case(
+        "run-out-of-memory",
+        "run -n {hub} {f}/memory.py",
+        FAILED,
+        "MemoryError",
+        "the program ran out of memory",
+        "gc.collect()",
+        "the program ended with an error",
+        program_error=True,
+    ),
+    # -- upload ----------------------------------------------------------------------------------
+    case("upload-without-program", "upload -n {hub}", USAGE, "required: SCRIPT"),
+    case("upload-syntax-error", "upload -n {hub} {f}/bracket.py", FAILED, "bracket.py:2: SyntaxError"),
+    case("upload-missing-file", "upload -n {hub} {f}/missing.py", FAILED, "missing.py: no such file"),
+    case(
+        "upload-relative-path", "upload -n {hub} --path tools.py {f}/ok.py", USAGE, "absolute hub file path"
+    ),
+    case("upload-folder-path", "upload -n {hub} --path /lib/ {f}/ok.py", USAGE, "absolute hub file path"),
+    case(
+        "upload-dotdot-path",
+        "upload -n {hub} --path /../etc/x {f}/ok.py",
+        USAGE,
+        "'..' parts are not allowed",
+    ),
+    case(
+        "upload-empty-part-path", "upload -n {hub} --path /lib//x.py {f}/ok.py", USAGE, "empty, '.' and '..'"
+    ),
+    case("upload-verbatim-missing", "upload -n {hub} --path /x.txt {f}/missing.py", FAILED, "no such file"),
+    case("upload-verbatim-folder", "upload -n {hub} --path /x.txt {f}/folder.py", FAILED, "is a folder"),
+    case(
+        "upload-verbatim-oversized",
+        "upload -n {hub} --path /x.txt {f}/big.py",
+        FAILED,
+        f"is {OVERSIZED_BYTES} bytes",
+        "up to 262144 bytes",
+    ),
+    case(
+        "upload-into-missing-folder",
+        "upload -n {hub} --path /nodir/x.py {f}/ok.py",
+        FAILED,
+        "could not store /nodir/x.py",
+        "there is no folder /nodir on the hub",
+    ),
+    case(
+        "upload-onto-a-folder",
+        "upload -n {hub} --path /openbricks_logs {f}/ok.py",
+        FAILED,
+        "/openbricks_logs is a folder on the hub",
+        "name a file inside it",
+    ),
+    case(
+        "upload-under-a-file",
+        "upload -n {hub} --path /program.py/x.py {f}/ok.py",
+        FAILED,
+        "part of /program.py is a file on the hub, not a folder",
+    ),
+    # -- stop ------------------------------------------------------------------------------------
+    case("stop-without-name", "stop", USAGE, "required: -n/--name"),
+    case("stop-extra-argument", "stop -n {hub} now", USAGE, "unrecognized arguments: now"),
+    case("stop-unknown-hub", "stop -n Nope --scan-timeout 0.5", FAILED, "no hub named 'Nope'", HUB),
+    # -- log -------------------------------------------------------------------------------------
+    case(
+        "log-run-that-never-was",
+        "log -n {hub} --run 99",
+        FAILED,
+        "has no run 99: no such run exists yet",
+        "the newest is run ",
+        "runs you can show: ",
+    ),
+    case(
+        "log-negative-run",
+        "log -n {hub} --run -1",
+        USAGE,
+        "there is no run -1: runs are numbered from 0",
+        "--list",
+    ),
+    case(
+        "log-overwritten-run",
+        "log -n {hub} --run 0",
+        FAILED,
+        "run 0 of RobotA was overwritten",
+        "last 10 runs",
+        "runs you can show: ",
+    ),
+    case("log-word-run", "log -n {hub} --run last", USAGE, "'last' is not a run number"),
+    case("log-unknown-hub", "log -n Nope --scan-timeout 0.5", FAILED, "no hub named 'Nope'"),
+    # -- list ------------------------------------------------------------------------------------
+    case("list-negative-timeout", "list --timeout -3", USAGE, "positive number of seconds"),
+    case("list-zero-timeout", "list --timeout 0", USAGE, "positive number of seconds"),
+    case("list-extra-argument", "list RobotA", USAGE, "unrecognized arguments: RobotA"),
+    # -- servo-id --------------------------------------------------------------------------------
+    case("servo-id-nothing-to-do", "servo-id", USAGE, "give the NEW_ID to assign, or --scan"),
+    case("servo-id-too-high", "servo-id 300", USAGE, "new id 300: servo bus ids are 0..253"),
+    case("servo-id-negative", "servo-id -1", USAGE, "new id -1: servo bus ids are 0..253"),
+    case("servo-id-broadcast", "servo-id 254", USAGE, "254 is the broadcast id"),
+    case(
+        "servo-id-old-id-too-high", "servo-id 5 --old-id 999", USAGE, "--old-id 999: servo bus ids are 0..253"
+    ),
+    case("servo-id-hub-bad-id", "servo-id -n {hub} 300", USAGE, "servo bus ids are 0..253"),
+    case("servo-id-word", "servo-id five", USAGE, "invalid int value: 'five'"),
+    case("servo-id-port-and-hub", "servo-id 5 -p /dev/ttyUSB0 -n {hub}", USAGE, "not allowed with argument"),
+    case(
+        "servo-id-missing-port",
+        "servo-id 5 -p /dev/no-such-adapter",
+        FAILED,
+        "cannot open /dev/no-such-adapter: there is no such port",
+    ),
+    case("servo-id-negative-timeout", "servo-id --scan --timeout -1", USAGE, "positive number of seconds"),
+    case("servo-id-zero-baudrate", "servo-id --scan --baudrate 0", USAGE, "whole number above 0"),
+    case("servo-id-negative-pin", "servo-id --scan -n {hub} --tx -3", USAGE, "GPIO numbers start at 0"),
+    case(
+        "servo-id-missing-pin",
+        "servo-id --scan -n {hub} --tx 99",
+        FAILED,
+        "GPIO 99 doesn't exist on the ESP32-S3",
+    ),
+    case("servo-id-unknown-hub", "servo-id 5 -n Nope --scan-timeout 0.5", FAILED, "no hub named 'Nope'"),
+    # -- paste-probe -----------------------------------------------------------------------------
+    case("paste-probe-tiny-max", "paste-probe -n {hub} --max 10", USAGE, "the probe starts at 256 bytes"),
+    case("paste-probe-zero-timeout", "paste-probe -n {hub} --timeout 0", USAGE, "positive number of seconds"),
+    case("paste-probe-without-name", "paste-probe", USAGE, "required: -n/--name"),
+    # -- flash -----------------------------------------------------------------------------------
+    case("flash-without-name", "flash", USAGE, "required: --name"),
+    case("flash-empty-name", ("flash", "--name", ""), USAGE, "--name is empty"),
+    case("flash-name-with-spaces", ("flash", "--name", " RobotA"), USAGE, "starts or ends with spaces"),
+    case("flash-long-name", "flash --name " + "R" * 40, USAGE, "is 40 bytes", "at most 26"),
+    case("flash-unknown-chip", "flash --name A --chip esp99", USAGE, "invalid choice: 'esp99'"),
+    case("flash-zero-baud", "flash --name A --baud 0", USAGE, "whole number above 0"),
+    case(
+        "flash-missing-firmware",
+        "flash --name A --port {silent_port} --firmware {f}/missing.bin",
+        FAILED,
+        "missing.bin: no such firmware file",
+        answer_within_s=5.0,
+    ),
+    case(
+        "flash-junk-firmware",
+        "flash --name A --port {silent_port} --firmware {f}/junk.bin",
+        FAILED,
+        "junk.bin is not an ESP32 firmware image",
+        answer_within_s=5.0,
+    ),
+    case(
+        "flash-empty-firmware",
+        "flash --name A --port {silent_port} --firmware {f}/empty.bin",
+        FAILED,
+        "empty.bin is not an ESP32 firmware image",
+        answer_within_s=5.0,
+    ),
+    case(
+        "flash-folder-firmware",
+        "flash --name A --port {silent_port} --firmware {f}/folder.py",
+        FAILED,
+        "folder.py is a folder",
+        answer_within_s=5.0,
+    ),
+    case("flash-missing-port", "flash --name A --port /dev/no-such-board", FAILED, "there is no such port"),
+    # -- docs ------------------------------------------------------------------------------------
+    case("docs-unknown-page", "docs nosuch", USAGE, "no docs page 'nosuch'", "pages: "),
+    case("docs-typo", "docs simulater", USAGE, "did you mean simulator?"),
+    case("docs-path-traversal", "docs ../../etc/passwd", USAGE, "no docs page '../../etc/passwd'"),
+    # -- sim -------------------------------------------------------------------------------------
+    case("sim-unknown-command", "sim bogus", USAGE, "invalid choice: 'bogus'"),
+    case("sim-run-without-program", "sim run", USAGE, "required: SCRIPT"),
+    case("sim-run-missing-file", "sim run {f}/missing.py", FAILED, "missing.py: no such program file"),
+    case("sim-run-folder", "sim run {f}/folder.py", FAILED, "folder.py is a folder"),
+    case("sim-run-binary-file", "sim run {f}/picture.py", FAILED, "is not UTF-8 text"),
+    case("sim-run-nul-byte", "sim run {f}/nul.py", FAILED, "nul.py contains a NUL byte"),
+    case(
+        "sim-run-syntax-error",
+        "sim run {f}/bracket.py",
+        FAILED,
+        'File "bracket.py", line 2',
+        "x = (1,",
+        "^",
+        "SyntaxError: '(' was never closed",
+    ),
+    case(
+        "sim-run-unknown-world",
+        "sim run {f}/ok.py --world mars",
+        FAILED,
+        "unknown world 'mars'",
+        "line_track",
+    ),
+    case("sim-run-program-as-world", "sim run {f}/ok.py --world {f}/ok.py", FAILED, "is not an MJCF model"),
+    case(
+        "sim-run-broken-world",
+        "sim run {f}/ok.py --world {f}/broken.xml",
+        FAILED,
+        "not a model MuJoCo can load",
+    ),
+    case("sim-run-unknown-chassis", "sim run {f}/ok.py --chassis tank", USAGE, "invalid choice: 'tank'"),
+    case("sim-run-negative-duration", "sim run {f}/ok.py --duration -1", USAGE, "give a positive number"),
+    case("sim-run-zero-speed", "sim run {f}/ok.py --speed 0", USAGE, "give a positive number"),
+    case("sim-run-negative-wall-limit", "sim run {f}/ok.py --wall-limit -1", USAGE, "give a positive number"),
+    case("sim-run-nan-position", "sim run {f}/ok.py --x nan", USAGE, "give a finite number"),
+    case("sim-run-hub-dir-is-a-file", "sim run {f}/ok.py --hub-dir {f}/ok.py", FAILED, "is a file"),
+    case("sim-preview-zero-duration", "sim preview --headless --duration 0", USAGE, "give a positive number"),
+]
+
+
+@pytest.fixture(scope="module")
+def files(tmp_path_factory):
+    """The bad files people hand the CLI."""
+    folder = tmp_path_factory.mktemp("bad-input")
+    (folder / "ok.py").write_text("print('ok')\n")
+    (folder / "folder.py").mkdir()
+    (folder / "picture.py").write_bytes(b"\x89PNG\r\n\x1a\n" + bytes(range(256)))
+    (folder / "latin1.py").write_bytes("print('a')\nprint('b')\nname = 'café'\n".encode("latin-1"))
+    (folder / "nul.py").write_bytes(b"print(1)\nprint(2)\x00\n")
+    (folder / "big.py").write_text("#" * (OVERSIZED_BYTES - 1) + "\n")
+    (folder / "bracket.py").write_text("print('start')\nx = (1,\n")
+    (folder / "indent.py").write_text("x = 1\n    y = 2\n")
+    (folder / "open_string.py").write_text('x = "abc\n')
+    (folder / "match.py").write_text("match command:\n    case 1:\n        pass\n")
+    (folder / "memory.py").write_text("print('allocating')\nbuffer = bytearray(1 << 40)\n")
+    (folder / "junk.bin").write_bytes(b"not a firmware image at all\n")
+    (folder / "empty.bin").write_bytes(b"")
+    (folder / "broken.xml").write_text("<mujoco><worldbody>\n")
+    return folder
+
+
+@pytest.fixture(scope="module")
+def silent_port():
+    """A serial port nothing answers on: probing it would cost seconds, so it must not be probed."""
+    main, other = os.openpty()
+    yield os.ttyname(other)
+    os.close(main)
+    os.close(other)
+
+
+@pytest.fixture(scope="module")
+def catalogue_env(hub, tmp_path_factory):
+    """The hub with eleven runs behind it (run 0 overwritten, runs 1..10 kept) and a staged
+    /program.py; an esptool that cannot start and a browser that opens nothing, so a case that went
+    further than it should shows up in its message instead of touching anything."""
+    for _ in range(11):
+        done = cli(hub.env, "run", "-n", HUB, "-c", "pass")
+        assert done.returncode == 0, done.stderr
+    return dict(
+        hub.env,
+        OPENBRICKS_ESPTOOL=str(tmp_path_factory.mktemp("no-esptool") / "esptool"),
+        BROWSER="true %s",
+        OPENBRICKS_CACHE_DIR=str(tmp_path_factory.mktemp("cache")),
+    )
+
+
+@pytest.mark.parametrize("bad", CASES)
+def test_bad_input_gets_a_clear_answer(bad: Case, catalogue_env, files, silent_port):
+    args = [part.format(f=files, hub=HUB, silent_port=silent_port) for part in bad.argv]
+    started = time.monotonic()
+    done = cli(catalogue_env, *args)
+    elapsed_s = time.monotonic() - started
+    said = done.stderr + done.stdout
+
+    assert done.returncode == bad.status, f"exit {done.returncode}, not {bad.status}: {said}"
+    for words in bad.words:
+        assert words in said, f"{words!r} missing from: {said}"
+    if not bad.program_error:
+        assert not _TRACEBACK.search(said), said
+    leaked = {name for name in _EXCEPTION_NAME.findall(said) if name not in _USER_FACING}
+    assert not leaked, f"internal exception names {leaked} in: {said}"
+    assert not _ERRNO.search(said), said
+    if bad.answer_within_s is not None:
+        assert "==>" not in done.stderr, f"it started working before checking: {said}"
+        assert elapsed_s < bad.answer_within_s, f"took {elapsed_s:.1f} s: {said}"
+
+
+def test_the_catalogue_covers_every_command():
+    from openbricks_server.cli import COMMANDS
+
+    covered = {c.values[0].argv[0] for c in CASES}
+    assert set(COMMANDS) - {"doc"} <= covered
+    assert len(CASES) >= 40
