@@ -87,9 +87,10 @@ async def open_link(name: str, scan_timeout_s: float):
         others = _virtual_names()
         seen = ", ".join(others) if others else "none running"
         raise CliError(
-            f"no hub named {name!r} was found: it is not one of the virtual hubs on this computer "
-            f"({seen}), and Bluetooth is unavailable on this computer ({bluetooth_unavailable(exc)}), so "
-            "no real hub could be looked for; switch Bluetooth on, or check the name"
+            f"no hub named {name!r} was found: no virtual hub of that name runs on this computer "
+            f"(virtual hubs: {seen}), and Bluetooth is unavailable on this computer "
+            f"({bluetooth_unavailable(exc)}), so no real hub could be looked for; switch Bluetooth on, or "
+            "check the name"
         ) from None
     return BleLink(name, device=advert.device, connect_timeout_s=CONNECT_TIMEOUT_S), False
 

@@ -107,7 +107,7 @@ def test_the_same_or_an_older_version_needs_yes(tmp_path, board, keys, fake_espt
 def test_names_that_cannot_be_advertised_are_refused(tmp_path, board, keys, fake_esptool):
     env = flash_env(board, fake_esptool, keys[1])
     done = cli(env, "flash", "--name", "x" * 30, "--port", board.pty)
-    assert done.returncode == 1 and "a Bluetooth advertisement carries at most 26" in done.stderr
+    assert done.returncode == 2 and "a Bluetooth advertisement carries at most 26" in done.stderr
     assert fake_esptool.calls() == []
 
 

@@ -86,7 +86,7 @@ def test_syntax_errors_come_before_any_hub_is_looked_for(env, tmp_path):
     done = cli(env, "run", "-n", "NoSuchHub", str(program))
     assert time.perf_counter() - started < 10
     assert done.returncode == 1
-    assert "typo.py:2: SyntaxError: invalid syntax" in done.stderr and "2 | if True" in done.stderr
+    assert "typo.py:2: SyntaxError: expected ':'" in done.stderr and "2 | if True" in done.stderr
     assert "NoSuchHub" not in done.stderr
 
 
