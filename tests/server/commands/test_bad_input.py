@@ -328,7 +328,12 @@ CASES = [
     case("sim-run-unknown-chassis", "sim run {f}/ok.py --chassis tank", USAGE, "invalid choice: 'tank'"),
     case("sim-run-negative-duration", "sim run {f}/ok.py --duration -1", USAGE, "give a positive number"),
     case("sim-run-zero-speed", "sim run {f}/ok.py --speed 0", USAGE, "give a positive number"),
-    case("sim-run-negative-wall-limit", "sim run {f}/ok.py --wall-limit -1", USAGE, "give a positive number"),
+    case(
+        "sim-run-negative-wall-limit", "sim run {f}/ok.py --wall-limit -1", USAGE, "give a number from 0 up"
+    ),
+    case(
+        "sim-run-negative-seed", "sim run {f}/ok.py --seed -3", USAGE, "'-3': give a whole number from 0 up"
+    ),
     case("sim-run-nan-position", "sim run {f}/ok.py --x nan", USAGE, "give a finite number"),
     case("sim-run-hub-dir-is-a-file", "sim run {f}/ok.py --hub-dir {f}/ok.py", FAILED, "is a file"),
     case("sim-preview-zero-duration", "sim preview --headless --duration 0", USAGE, "give a positive number"),
