@@ -38,9 +38,14 @@ _ACK_NONE = const(0)
 _ACK_START = const(1)
 _ACK_STOP = const(2)
 
+IDENTIFY_HALF_PERIOD_MS = const(125)  # 4 Hz white blink: unlike anything else the LED shows
+COLOR_IDENTIFY = (255, 255, 255)
+
 # Written by notify_press() from any context (the launcher's timer, the hard-tick stop path), read
 # and cleared by the watcher's tick: a plain int store is atomic on both interpreters.
 _pending_ack = [_ACK_NONE]
+_identify_until = [None]  # ticks_ms when identify() ends, or None
+_running_watcher = [None]  # the BluetoothToggleButton painting the LED, if one is started
 
 
 def notify_press(stop=False):
@@ -49,6 +54,19 @@ def notify_press(stop=False):
     Rendered by the running BluetoothToggleButton on its next tick; cheap and safe from any context.
     """
     _pending_ack[0] = _ACK_STOP if stop else _ACK_START
+
+
+def identify(duration_ms):
+    """Blink the status LED white at 4 Hz for `duration_ms`, so a person can tell which hub this is.
+
+    Returns False when no started watcher owns an LED (nothing can blink), True otherwise. The blink
+    takes precedence over everything but a press acknowledgment, then the LED shows the hub's state.
+    """
+    watcher = _running_watcher[0]
+    if watcher is None or watcher._led is None:
+        return False
+    _identify_until[0] = time.ticks_add(time.ticks_ms(), int(duration_ms))
+    return True
 
 
 class BluetoothToggleButton:
@@ -103,6 +121,7 @@ class BluetoothToggleButton:
         bluetooth.add_state_listener(self._on_state)
         self._timer = machine.Timer(self._timer_id)
         self._timer.init(mode=machine.Timer.PERIODIC, period=self._poll_ms, callback=self._tick)
+        _running_watcher[0] = self
         self._render(time.ticks_ms())
         return self
 
@@ -112,6 +131,8 @@ class BluetoothToggleButton:
             return
         self._timer.deinit()
         self._timer = None
+        if _running_watcher[0] is self:
+            _running_watcher[0] = None
         bluetooth.remove_state_listener(self._on_state)
 
     def is_running(self):
@@ -154,8 +175,14 @@ class BluetoothToggleButton:
             self._ack_until_ms = time.ticks_add(now_ms, ACK_MS)
         state_color = self._color_on if bluetooth.is_active() else self._color_off
         colour = getattr(led, "has_colour", False)
+        identify_until = _identify_until[0]
+        if identify_until is not None and time.ticks_diff(identify_until, now_ms) <= 0:
+            _identify_until[0] = identify_until = None
         if self._ack_color is not None and time.ticks_diff(self._ack_until_ms, now_ms) > 0:
             want = self._ack_color if colour else True
+        elif identify_until is not None:
+            lit = (time.ticks_diff(identify_until, now_ms) // IDENTIFY_HALF_PERIOD_MS) % 2 == 0
+            want = (COLOR_IDENTIFY if lit else _DARK) if colour else lit
         else:
             self._ack_color = None
             if self._program_running():
@@ -179,5 +206,7 @@ class BluetoothToggleButton:
 
 
 def reset_state():
-    """Drop a pending press acknowledgment (a fresh start in tests)."""
+    """Drop a pending press acknowledgment and identify blink (a fresh start in tests)."""
     _pending_ack[0] = _ACK_NONE
+    _identify_until[0] = None
+    _running_watcher[0] = None

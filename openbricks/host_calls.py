@@ -10,8 +10,15 @@ before it, the result frame after it, so the host knows that bytes in between (a
 are the program's. A frame is written whole even if a Ctrl-C lands meanwhile (it is written again
 and the interrupt raised after it), so a stop never cuts the result short.
 
+A host that stays connected (the console daemon) passes `watch=<nonce>` to `run` and `idle`: each
+program run is then announced on the console as `@openbricks:<nonce> run-begin {"run", "slot",
+"started_ms"}` (the run log's index, slot and header stamp: the key that matches live output to the
+log read back later) and, for button runs, `@openbricks:<nonce> run-end {"run", "outcome"}`; the
+program's `openbricks.tools.plot()` samples carry the same nonce. Text a program prints can't pass
+for these: it does not know the nonce.
+
 Calls: info, set_rtc, stage, stage_begin / stage_append / stage_end, read_file, run, runs, read_run,
-idle, reset, paste_probe, record_provenance, set_hub_name, servo_scan, servo_set_id. Binary payloads
+idle, identify, reset, paste_probe, record_provenance, set_hub_name, servo_scan, servo_set_id. Binary payloads
 travel as base64 text, optionally zlib-compressed (the hub has `deflate`), because raw-REPL input is
 text and base64 of compressed bytes is shorter than a Python bytes literal of the originals.
 """
@@ -27,7 +34,7 @@ import time
 import machine
 
 import openbricks
-from openbricks import launcher, log, pins
+from openbricks import launcher, log, pins, tools
 
 FRAME_PREFIX = "@openbricks:"
 PROTOCOL = 2  # 2: tagged frames (tag(), "program" and "result" frames)
@@ -42,6 +49,8 @@ READ_CHUNK_BYTES = 8192  # largest slice of a run log returned by one read_run c
 READ_FILE_MAX_BYTES = 4096
 _S_IFDIR = 0x4000
 RESET_GRACE_MS = 100  # lets the reset reply drain from the UART/BLE buffers before the chip restarts
+WATCHED_NOTE = "watched: "  # the run log's record of the nonce a watched run's frames carry
+IDENTIFY_MAX_MS = 30000
 
 _REG_ID = 0x05  # STS EEPROM: bus id
 _REG_LOCK = 0x37  # STS: 0 unlocks EEPROM writes, 1 locks them again
@@ -351,13 +360,60 @@ def read_file(path, offset=0, size=READ_FILE_MAX_BYTES):
 # -- running and the run logs --------------------------------------------------------------------
 
 
-def run(path=None):
+def _alnum(text):
+    for char in text:
+        if not ("0" <= char <= "9" or "a" <= char <= "z" or "A" <= char <= "Z"):
+            return False
+    return True
+
+
+class _Watch:
+    """While a host watches (`watch=<nonce>`): run starts and ends announced, plot() samples tagged."""
+
+    def __init__(self, nonce):
+        if nonce is not None and (not isinstance(nonce, str) or not nonce or not _alnum(nonce)):
+            raise ValueError("watch=%r: give the host's nonce as letters and digits" % (nonce,))
+        self.nonce = nonce
+
+    def frame(self, kind, payload):
+        print(FRAME_PREFIX + self.nonce + " " + kind + " " + json.dumps(payload))
+
+    def _on_running(self, running):
+        session = log.active()
+        if running and session is not None:
+            # In the log too: its plot lines are this run's samples, other lookalikes its output.
+            session.write_text(WATCHED_NOTE + self.nonce)
+            slot = session.index % log.MAX_RUNS
+            self.frame("run-begin", {"run": session.index, "slot": slot, "started_ms": session.started_ms})
+
+    def on_run_end(self, outcome):
+        self.frame("run-end", {"run": _last_run(launcher.get().log_dir), "outcome": outcome})
+
+    def __enter__(self):
+        if self.nonce is not None:
+            launcher.add_listener(self._on_running)
+            tools._plot_tag[0] = self.nonce
+        return self
+
+    def __exit__(self, *exc_info):
+        if self.nonce is not None:
+            launcher.remove_listener(self._on_running)
+            tools._plot_tag[0] = None
+        return False
+
+
+def run(path=None, watch=None):
     """Run the staged program through the launcher between a program frame and the result frame.
 
     Whatever ends the run, the result frame follows: a stop (program button or Ctrl-C, even one
     that lands while the run is being wrapped up) prints it and then propagates KeyboardInterrupt,
-    as any interrupted raw-REPL command does.
+    as any interrupted raw-REPL command does. With `watch`, the run's start is announced (see the
+    top) inside the program's output.
     """
+    try:
+        watcher = _Watch(watch)
+    except ValueError as exc:
+        return _reply({"ok": False, "type": "ValueError", "error": str(exc)})
     interrupted = None
     result = None
     before = None  # the newest run log before this run: a newer one is this run's
@@ -366,7 +422,8 @@ def run(path=None):
         before = _last_run(hub.log_dir)
         interrupted = _frame("program")
         if interrupted is None:
-            result = {"ok": True, "outcome": hub.run_program("host run", path)}
+            with watcher:
+                result = {"ok": True, "outcome": hub.run_program("host run", path)}
     except KeyboardInterrupt as exc:
         interrupted = exc
     except Exception as exc:  # noqa: BLE001 - e.g. nothing staged: the host gets the reason
@@ -436,16 +493,42 @@ def read_run(index, offset=0, max_bytes=READ_CHUNK_BYTES, log_dir=log.LOG_DIR):
     return _call(_read_run, index, offset, max_bytes, log_dir)
 
 
-def idle():
+def idle(watch=None):
     """Hand the hub back to the launcher's idle loop, so the program button starts programs again.
 
-    The host calls this last, before it disconnects; its next connection's Ctrl-C ends the loop.
+    The host calls this last, before it disconnects; its next connection's Ctrl-C ends the loop. A
+    host that stays connected passes `watch`, and sees each button run begin and end (see the top).
     """
+    try:
+        watcher = _Watch(watch)
+    except ValueError as exc:
+        return _reply({"ok": False, "type": "ValueError", "error": str(exc)})
     _reply({"ok": True, "idle": True})
     try:
-        launcher.get().idle()
+        with watcher:
+            launcher.get().idle(on_run_end=watcher.on_run_end if watch is not None else None)
     except KeyboardInterrupt:
         pass
+
+
+def _identify(duration_ms):
+    if not isinstance(duration_ms, int) or not 0 < duration_ms <= IDENTIFY_MAX_MS:
+        raise ValueError("duration_ms=%r: blink for 1..%d ms" % (duration_ms, IDENTIFY_MAX_MS))
+    from openbricks import bluetooth_button
+
+    if not bluetooth_button.identify(duration_ms):
+        raise OSError(
+            "this hub has no status LED watcher running (its board setup failed at boot, or a user "
+            "main.py replaced it): reset the hub, or look for it by name"
+        )
+    return {"identify_ms": duration_ms}
+
+
+def identify(duration_ms=3000):
+    """Blink the status LED white for `duration_ms` so a person can find this hub on the table.
+
+    Returns at once: the LED's own timer does the blinking, so the hub stays free meanwhile."""
+    return _call(_identify, duration_ms)
 
 
 def reset():

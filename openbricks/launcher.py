@@ -489,11 +489,12 @@ class Launcher:
             self._stop_retries,
         )
 
-    def idle(self, duration_ms=None):
+    def idle(self, duration_ms=None, on_run_end=None):
         """Serve button starts in this (main) thread: forever, or for `duration_ms`.
 
         A console Ctrl-C while idle ends this loop (the host takes the hub); one during a run only
-        ends the run.
+        ends the run. `on_run_end(outcome)` is called once each button run is over and logged
+        (a host watching the hub learns how it ended without racing the run's wrap-up).
         """
         began = time.ticks_ms()
         self._idling = True
@@ -501,17 +502,20 @@ class Launcher:
             while duration_ms is None or time.ticks_diff(time.ticks_ms(), began) < duration_ms:
                 if self._start_requested:
                     self._start_requested = False
+                    outcome = None
                     try:
-                        self.run_program("button press", reraise_interrupt=False)
+                        outcome = self.run_program("button press", reraise_interrupt=False)
                     except KeyboardInterrupt:
                         # A stop retry that landed while the finished run was being torn down:
                         # the run is over either way, and the hub must keep serving the button.
-                        pass
+                        outcome = "stopped"
                     except Exception as exc:  # noqa: BLE001 - the run never started
                         # Nothing staged yet, or no room for the run log: say why on the console and
                         # keep serving the button (leaving this loop would leave the hub at the REPL
                         # with a program button that refuses every start until a reset).
                         print("program button: no run started: %s" % _exception_line(exc))
+                    if outcome is not None and on_run_end is not None:
+                        on_run_end(outcome)
                 time.sleep_ms(self.poll_ms)
         finally:
             self._idling = False

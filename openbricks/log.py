@@ -123,13 +123,15 @@ class _LogSession:
         self._line_open = False  # the last print ended without a newline
         self._capped = False
         self._failed = None  # the OSError that stopped file writes, if any
-        self.write_text("%s%d --" % (_HEADER_PREFIX, self.index))
+        #: The header line's stamp: with the slot, what a host matches a live run to its log by.
+        self.started_ms = epoch_ms()
+        self.write_text("%s%d --" % (_HEADER_PREFIX, self.index), stamp_ms=self.started_ms)
 
     # -- what goes in ------------------------------------------------------------------------
 
-    def _stamp(self, text):
+    def _stamp(self, text, stamp_ms=None):
         """`text` with the epoch stamp in front of every line that starts in it."""
-        stamp = "%d " % epoch_ms()
+        stamp = "%d " % (epoch_ms() if stamp_ms is None else stamp_ms)
         out = []
         start = 0
         while start < len(text):
@@ -165,7 +167,7 @@ class _LogSession:
             return
         self._queue(data)
 
-    def write_text(self, text, commit=True):
+    def write_text(self, text, commit=True, stamp_ms=None):
         """A framing line (or lines, e.g. a traceback): stamped, always kept, committed now (or, with
         commit=False, together with the next commit)."""
         if self._file is None:
@@ -175,7 +177,7 @@ class _LogSession:
             self._line_open = False
         if not text.endswith("\n"):
             text += "\n"
-        data = self._stamp(text)
+        data = self._stamp(text, stamp_ms)
         used = self._file_bytes + self._pending_bytes
         if used + len(data) > self.max_bytes + _FRAMING_RESERVE:
             self.dropped_bytes += len(data)

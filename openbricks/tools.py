@@ -1,8 +1,15 @@
-"""Small user-facing utilities mirroring `pybricks.tools`: wait() and StopWatch."""
+"""Small user-facing utilities mirroring `pybricks.tools`: wait(), StopWatch, and plot() for live graphs."""
 
+import json
 import time
 
 from openbricks import estop
+
+PLOT_NAME_MAX = 40
+FRAME_PREFIX = "@openbricks:"
+# The nonce of the host watching this run (the console daemon hands one over with `run`/`idle`), or
+# None: a plot line carries it, so output a program prints itself never turns into a sample.
+_plot_tag = [None]
 
 # A long wait is sliced so that a stop press ends it within one slice even on a hub whose firmware
 # cannot inject KeyboardInterrupt (the e-stop latch is checked between slices).
@@ -53,3 +60,31 @@ class StopWatch:
         if self._paused:
             self._started_ms = time.ticks_ms()
             self._paused = False
+
+
+def _plot_value(value):
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise TypeError("plot() value must be a number, not %s" % type(value).__name__)
+    if isinstance(value, float) and (value != value or value in (float("inf"), float("-inf"))):
+        raise ValueError("plot() value must be finite, got %r" % (value,))
+    return value
+
+
+def plot(name, value):
+    """Send one sample of the series `name` to the console's live graph (and the run's history).
+
+    With the console watching, the line is a tagged frame it turns into a telemetry sample; run
+    without it (`openbricks run` straight to the hub), it prints as `plot: name = value`. Plain
+    print() output is never taken for a sample.
+    """
+    if not isinstance(name, str) or not name or len(name) > PLOT_NAME_MAX:
+        raise ValueError("plot() name must be 1..%d characters of text, got %r" % (PLOT_NAME_MAX, name))
+    for char in name:
+        if ord(char) < 32:
+            raise ValueError("plot() name %r holds a control character" % (name,))
+    value = _plot_value(value)
+    tag = _plot_tag[0]
+    if tag is None:
+        print("plot: %s = %s" % (name, json.dumps(value)))
+    else:
+        print(FRAME_PREFIX + tag + " plot " + json.dumps({"name": name, "value": value}))

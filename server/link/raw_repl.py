@@ -369,14 +369,19 @@ class RawRepl:
         on_output: Callable[[bytes], None] | None = None,
         on_link_event: Callable[[LinkEvent], None] | None = None,
         timeout_s: float = DEFAULT_RUN_TIMEOUT_S,
+        watch: str | None = None,
     ) -> dict:
         """Run the staged program through the hub's launcher, streaming its output.
 
         A link that drops meanwhile is reported through `on_link_event` as soon as the transport
         notices, reconnected, and followed on: the hub keeps the program's output while nobody
         listens, so none is lost. A stop (Ctrl-C, the program button) is an outcome, not an error.
+        With `watch` (a nonce), the hub announces the run's log key and tags plot() samples with it
+        in the output (openbricks.host_calls).
         """
         data = {} if path is None else {"path": path}
+        if watch is not None:
+            data["watch"] = watch
         await self._await_prompt(self.timeout_s)
         try:
             (result,) = await self.exec_many(
