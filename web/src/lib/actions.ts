@@ -15,20 +15,28 @@ function refusedFor(kind: "mutate" | "upload"): boolean {
   return reason !== null;
 }
 
+/** One hub's answer to stop-all. */
 export interface StopAllResult {
-  hub_id: string;
-  ok: boolean;
-  message?: string;
+  hub: string;
+  name: string;
+  stopped: boolean;
+  detail?: string | null;
 }
 
 export async function stopAll(): Promise<void> {
   if (refusedFor("mutate")) return;
   try {
-    const r = await api.post<{ results?: StopAllResult[] } | StopAllResult[]>("/api/hubs/stop-all");
-    const results = Array.isArray(r) ? r : (r?.results ?? []);
-    const failed = results.filter((x) => !x.ok);
-    if (failed.length) model.notify("error", `STOP ALL: ${failed.length} hub(s) did not confirm: ${failed.map((f) => `${hubName(f.hub_id)} (${f.message ?? "no answer"})`).join(", ")}`);
-    else model.notify("info", `STOP ALL sent to ${results.length || "every"} hub${results.length === 1 ? "" : "s"}.`);
+    const r = await api.post<StopAllResult[] | { results: StopAllResult[] }>("/api/hubs/stop-all");
+    const results = Array.isArray(r) ? r : r.results;
+    const stopped = results.filter((x) => x.stopped).map((x) => x.name);
+    const idle = results.filter((x) => !x.stopped && x.detail === "nothing was running").map((x) => x.name);
+    const failed = results.filter((x) => !x.stopped && x.detail !== "nothing was running");
+    const parts = [
+      stopped.length ? `stopped ${stopped.join(", ")}` : "",
+      idle.length ? `nothing running on ${idle.join(", ")}` : "",
+      failed.length ? `not stopped: ${failed.map((f) => `${f.name} (${f.detail ?? "no answer"})`).join(", ")}` : "",
+    ].filter(Boolean);
+    model.notify(failed.length ? "error" : "info", `STOP ALL: ${parts.join("; ") || "no hubs"}.`);
   } catch (err) {
     model.fail(err, "STOP ALL");
   }

@@ -27,24 +27,27 @@ export interface Hub {
 
 export interface Program {
   name: string;
+  version: number;
+  sha256: string;
+  size: number;
+  created_ms: number;
+  who: string | null;
   source?: string;
-  version?: number;
-  updated_ms?: number;
-  hash?: string;
 }
 
 export interface Run {
   run_id: string;
-  hub_id: string | null;
-  hub_name?: string | null;
+  hub_id: string;
   origin: string;
   program_name: string | null;
-  program_hash?: string | null;
+  program_sha256: string | null;
+  slot: number | null;
+  who: string | null;
   started_ms: number;
   ended_ms: number | null;
   outcome: RunOutcome | null;
-  detail?: string | null;
-  line_count?: number;
+  detail: string | null;
+  line_count: number;
 }
 
 export interface OutputLine {
@@ -62,8 +65,9 @@ export interface TelemetrySample {
 }
 
 export interface Me {
+  label: string;
   role: Role;
-  who: string | null;
+  via: "cookie" | "bearer";
 }
 
 /** One failure as the daemon explains it; `status` 0 means the daemon could not be reached at all. */

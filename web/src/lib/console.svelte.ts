@@ -130,13 +130,11 @@ export class ConsoleModel {
   /** Reload everything the stream may have missed. */
   async refetch(r?: Refetch): Promise<void> {
     if (r && !r.quiet) this.notify("warn", r.message);
-    try {
-      const [me, hubs] = await Promise.all([api.get<Me>("/api/auth/me"), api.get<Hub[] | { hubs: Hub[] }>("/api/hubs")]);
-      this.me = me;
-      this.setHubs(Array.isArray(hubs) ? hubs : hubs.hubs);
-    } catch (err) {
-      this.fail(err, "Loading the console's state");
-    }
+    const [me, hubs] = await Promise.allSettled([api.get<Me>("/api/auth/me"), api.get<Hub[]>("/api/hubs")]);
+    if (me.status === "fulfilled") this.me = me.value;
+    else this.fail(me.reason, "Signing in");
+    if (hubs.status === "fulfilled") this.setHubs(hubs.value);
+    else this.fail(hubs.reason, "Loading the hubs");
     if (this.apiPaths === null) {
       try {
         const schema = await api.get<{ paths: Record<string, unknown> }>("/openapi.json");
@@ -246,9 +244,17 @@ export class ConsoleModel {
   }
 }
 
-export async function fetchRunLines(run: string, after: number): Promise<OutputLine[]> {
-  const r = await api.get<OutputLine[] | { lines: OutputLine[] }>(`/api/runs/${encodeURIComponent(run)}/output${query({ after })}`);
-  return Array.isArray(r) ? r : r.lines;
+/** Every stored line of `run` after line `after`, page by page. */
+export async function fetchRunLines(run: string, after = 0): Promise<OutputLine[]> {
+  const all: OutputLine[] = [];
+  for (;;) {
+    const page = await api.get<{ lines: OutputLine[]; next_after: number; more: boolean }>(
+      `/api/runs/${encodeURIComponent(run)}/output${query({ after, limit: 5000 })}`,
+    );
+    all.push(...page.lines);
+    if (!page.more || page.next_after <= after) return all;
+    after = page.next_after;
+  }
 }
 
 export const consoleModel = new ConsoleModel();

@@ -9,27 +9,31 @@ import type { Problem } from "../components/CodeEditor.svelte";
 const enc = encodeURIComponent;
 
 export async function listPrograms(): Promise<Program[]> {
-  const r = await api.get<Program[] | { programs: Program[] }>("/api/programs");
-  return Array.isArray(r) ? r : r.programs;
+  return api.get<Program[]>("/api/programs");
 }
 
 export async function loadProgram(name: string): Promise<Program> {
   return api.get<Program>(`/api/programs/${enc(name)}`);
 }
 
-export async function saveProgram(name: string, source: string): Promise<Program> {
-  return api.put<Program>(`/api/programs/${enc(name)}`, { source });
+/** Store `source` as the newest version (unchanged text adds no version); refused with the reason if it
+ * cannot run on a hub (syntax, size, binary). */
+export async function saveProgram(name: string, source: string): Promise<{ program: Program; created: boolean }> {
+  return api.put(`/api/programs/${enc(name)}`, { source });
 }
 
-/** The editor marks for a refused save, or null when the refusal is not about the program's text. */
+/**
+ * The editor marks for a refused save: the daemon names the line of a syntax error (or of a binary or
+ * non-UTF-8 character) in the error's `detail`. Null when the refusal is not about a line of the text.
+ */
 export function problemsOf(err: unknown): Problem[] | null {
-  if (!(err instanceof ApiError) || !/syntax/i.test(err.code)) return null;
-  const d = (err.detail.detail ?? err.detail) as Record<string, unknown>;
-  const num = (v: unknown) => (typeof v === "number" ? v : typeof v === "string" && /^\d+$/.test(v) ? Number(v) : null);
-  const line = num(d.line) ?? num(d.lineno) ?? num(/line (\d+)/.exec(err.message)?.[1]) ?? 1;
-  const column = num(d.column) ?? num(d.col) ?? num(d.offset);
-  const message = typeof d.msg === "string" ? d.msg : err.message;
-  return [{ line, column, message }];
+  if (!(err instanceof ApiError)) return null;
+  const d = (err.detail.detail ?? {}) as Record<string, unknown>;
+  if (typeof d.line !== "number" || d.line < 1) return null;
+  const column = typeof d.column === "number" ? d.column : null;
+  // "square.py, line 3: invalid syntax: x = (" → "invalid syntax: x = (" beside the line itself.
+  const message = err.message.replace(/^.*?, line \d+: /, "");
+  return [{ line: d.line, column, message }];
 }
 
 export const TEMPLATE = `# A new program: it runs on the hub (or the simulator) exactly as written.

@@ -1,6 +1,6 @@
 /** The run history as the daemon keeps it: search, one run with its output, program and telemetry. */
 
-import { api, type OutputLine, query, type Run, type TelemetrySample } from "./api";
+import { api, query, type Run, type TelemetrySample } from "./api";
 
 const enc = encodeURIComponent;
 
@@ -8,8 +8,9 @@ export interface RunFilter {
   hub?: string;
   outcome?: string;
   q?: string;
-  since_ms?: number | null;
-  until_ms?: number | null;
+  /** local dates, YYYY-MM-DD: runs started on or after `since`, before `until` */
+  since?: string | null;
+  until?: string | null;
   before?: string | null;
   limit?: number;
 }
@@ -20,22 +21,17 @@ export interface RunDetail extends Run {
 }
 
 export async function searchRuns(f: RunFilter): Promise<Run[]> {
-  const r = await api.get<Run[] | { runs: Run[] }>(`/api/runs${query({ ...f })}`);
-  return Array.isArray(r) ? r : r.runs;
+  return api.get<Run[]>(`/api/runs${query({ ...f })}`);
 }
 
 export async function getRun(id: string): Promise<RunDetail> {
   return api.get<RunDetail>(`/api/runs/${enc(id)}`);
 }
 
-export async function runLines(id: string): Promise<OutputLine[]> {
-  const r = await api.get<OutputLine[] | { lines: OutputLine[] }>(`/api/runs/${enc(id)}/output`);
-  return Array.isArray(r) ? r : r.lines;
-}
+export { fetchRunLines as runLines } from "./console.svelte";
 
 export async function runSamples(id: string): Promise<TelemetrySample[]> {
-  const r = await api.get<TelemetrySample[] | { samples: TelemetrySample[] }>(`/api/runs/${enc(id)}/telemetry`);
-  return Array.isArray(r) ? r : r.samples;
+  return api.get<TelemetrySample[]>(`/api/runs/${enc(id)}/telemetry`);
 }
 
 /** Where a run's export lives; the browser downloads it with the session cookie. */

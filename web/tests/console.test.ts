@@ -1,0 +1,94 @@
+import { describe, expect, it } from "vitest";
+import type { Hub, OutputLine } from "../src/lib/api";
+import { ConsoleModel } from "../src/lib/console.svelte";
+import type { Envelope } from "../src/lib/events";
+
+const hub = (id: string, extra: Partial<Hub> = {}): Hub => ({
+  hub_id: id,
+  name: id.toUpperCase(),
+  kind: "virtual",
+  address: id,
+  status: "idle",
+  rssi: null,
+  last_seen_ms: null,
+  firmware: "openbricks 2.7.1",
+  capabilities: {},
+  staged_program: null,
+  run_id: null,
+  run_started_ms: null,
+  holder: null,
+  ...extra,
+});
+
+let seq = 0;
+const ev = (type: string, hubId: string | null, run: string | null, data: object): Envelope => ({
+  seq: ++seq,
+  type,
+  hub: hubId,
+  run,
+  ts: 1000 + seq,
+  data: data as Record<string, unknown>,
+});
+const line = (n: number) => ({ line_no: n, text: `l${n}`, hub_ms: n, recv_ms: n });
+const settle = () => new Promise((r) => setTimeout(r, 0));
+
+describe("ConsoleModel", () => {
+  it("follows hub events and lists hubs by name", () => {
+    const m = new ConsoleModel();
+    m.applyEvent(ev("hub", "b", null, hub("b")));
+    m.applyEvent(ev("hub", "a", null, hub("a")));
+    m.applyEvent(ev("hub", "b", "R1", hub("b", { status: "running", run_id: "R1", run_started_ms: 5 })));
+    expect(m.hubList.map((h) => h.name)).toEqual(["A", "B"]);
+    expect(m.hubs.b.status).toBe("running");
+    expect(m.anyRunning).toBe(true);
+  });
+
+  it("keeps two hubs' outputs apart and records each run's outcome", () => {
+    const m = new ConsoleModel();
+    m.applyEvent(ev("run_started", "a", "RA", { run_id: "RA", hub_id: "a", program_name: "p.py", origin: "daemon", started_ms: 1 }));
+    m.applyEvent(ev("run_started", "b", "RB", { run_id: "RB", hub_id: "b", program_name: "p.py", origin: "daemon", started_ms: 1 }));
+    m.applyEvent(ev("output", "a", "RA", { lines: [line(1), line(2)] }));
+    m.applyEvent(ev("output", "b", "RB", { lines: [line(1)] }));
+    m.applyEvent(ev("run_ended", "a", "RA", { run_id: "RA", outcome: "finished", detail: null, ended_ms: 9 }));
+    const text = (id: string) => m.output(id).entries.map((e) => e.text);
+    expect(text("a")).toEqual(["▶ p.py started (daemon)", "l1", "l2", "■ finished"]);
+    expect(text("b")).toEqual(["▶ p.py started (daemon)", "l1"]);
+    expect(m.lastOutcome).toEqual({ a: "finished" });
+    expect(m.runs.RA.outcome).toBe("finished");
+  });
+
+  it("fills a hole in a run's output from the store before showing what follows", async () => {
+    const asked: [string, number][] = [];
+    const m = new ConsoleModel(async (run: string, after = 0) => {
+      asked.push([run, after]);
+      return [line(2), line(3)] as OutputLine[];
+    });
+    m.applyEvent(ev("output", "a", "R", { lines: [line(1)] }));
+    m.applyEvent(ev("output", "a", "R", { lines: [line(4)] }));
+    await settle();
+    expect(asked).toEqual([["R", 1]]);
+    expect(m.output("a").entries.map((e) => e.text)).toEqual(["l1", "l2", "l3", "l4"]);
+  });
+
+  it("keeps telemetry per run", () => {
+    const m = new ConsoleModel();
+    m.applyEvent(ev("telemetry", "a", "R", { samples: [{ name: "speed", value: 1, hub_ms: 1000, recv_ms: 1000 }, { name: "speed", value: 2, hub_ms: 1500, recv_ms: 1500 }] }));
+    const t = m.runTelemetry("R");
+    expect(t.names()).toEqual(["speed"]);
+    expect(t.series.get("speed")).toEqual({ t: [0, 0.5], v: [1, 2] });
+  });
+
+  it("disables mutation for a viewer and locks uploads in competition mode while a run is on", () => {
+    const m = new ConsoleModel();
+    expect(m.readOnlyReason).toMatch(/Waiting/);
+    m.me = { label: "coach", role: "viewer", via: "cookie" };
+    expect(m.readOnlyReason).toMatch(/Viewer role/);
+    m.me = { label: "local", role: "operator", via: "cookie" };
+    expect(m.readOnlyReason).toBeNull();
+    m.competition.on = true;
+    expect(m.uploadLockReason).toBeNull();
+    m.applyEvent(ev("hub", "a", "R", hub("a", { status: "running" })));
+    expect(m.uploadLockReason).toMatch(/Competition mode/);
+    expect(m.readOnlyReason).toBeNull(); // stopping stays possible
+  });
+});
