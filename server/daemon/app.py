@@ -32,6 +32,7 @@ from openbricks_server.daemon.events import EventBus
 from openbricks_server.daemon.recorder import INTERRUPTED_BY_CRASH, Recorder
 from openbricks_server.daemon.routers import auth as auth_router
 from openbricks_server.daemon.routers import events as events_router
+from openbricks_server.daemon.routers import hubs as hubs_router
 from openbricks_server.daemon.routers import pages, programs, runs, system
 from openbricks_server.daemon.store import Store, now_ms
 
@@ -69,8 +70,28 @@ async def output_writer(ctx: DaemonContext) -> AsyncIterator[None]:
         ctx.hub_events.close()
 
 
-SERVICES: list[Service] = [output_writer]
-ROUTERS = [system.router, auth_router.router, programs.router, runs.router, events_router.router]
+@asynccontextmanager
+async def hub_manager(ctx: DaemonContext) -> AsyncIterator[None]:
+    """Starts the hubs (virtual ones as subprocesses, the BLE scan); hands them all back at shutdown."""
+    from openbricks_server.daemon.hubs.manager import HubManager
+
+    ctx.hubs = HubManager(ctx.config, ctx.hub_events, ctx.store)
+    try:
+        await ctx.hubs.start()
+        yield
+    finally:
+        await ctx.hubs.close()
+
+
+SERVICES: list[Service] = [output_writer, hub_manager]
+ROUTERS = [
+    system.router,
+    auth_router.router,
+    programs.router,
+    runs.router,
+    events_router.router,
+    hubs_router.router,
+]
 
 
 def create_app(config: DaemonConfig, services: Sequence[Service] | None = None) -> FastAPI:

@@ -70,7 +70,7 @@ class HubManager:
             await self._start_virtual_hubs(count)
         for port in _option(self.config, "serial_ports", ()) or ():
             self.add(SerialBackend(Path(port).name, port), auto_connect=True)
-        if _option(self.config, "no_ble", False):
+        if not _option(self.config, "ble", True):
             self.ble_status = "off (--no-ble)"
         else:
             self.ble_status = "starting"
@@ -85,7 +85,7 @@ class HubManager:
         await asyncio.gather(*(actor.close() for actor in self._actors.values()), return_exceptions=True)
 
     async def _start_virtual_hubs(self, count: int) -> None:
-        data_dir = _option(self.config, "data_dir", None)
+        data_dir = _option(self.config, "resolved_data_dir", None) or _option(self.config, "data_dir", None)
         if data_dir is None:
             from openbricks_server.paths import data_dir as default_data_dir
 
