@@ -21,6 +21,7 @@ import sys
 import time
 
 from openbricks_sim.limits import DEFAULT_MEMORY_MB
+from openbricks_sim.program_robot import DEFAULT_CHASSIS
 
 EXIT_OK = 0
 EXIT_FAILED = 1
@@ -87,7 +88,9 @@ def _start_options(parser: argparse.ArgumentParser) -> None:
         "--world", default="empty", help=f"World name ({WORLD_NAMES}) or an MJCF file. Default: %(default)s."
     )
     parser.add_argument(
-        "--chassis", default="st3032", choices=CHASSIS_NAMES, help="Robot build. Default: %(default)s."
+        "--chassis",
+        choices=CHASSIS_NAMES,
+        help="Robot build. Default: the one whose motors the program constructs (st3032 otherwise).",
     )
     parser.add_argument(
         "--x", type=_finite, help="Start x on the mat, in metres. Default: the world's start."
@@ -289,12 +292,17 @@ def _preview(args) -> int:
         if launch is None:
             raise SimCliError(VIEWER_UNAVAILABLE)
         return (
-            launch(world=world, chassis=args.chassis, seed=args.seed, start_mm_deg=_start_pose(args, world))
+            launch(
+                world=world,
+                chassis=args.chassis or DEFAULT_CHASSIS,
+                seed=args.seed,
+                start_mm_deg=_start_pose(args, world),
+            )
             or 0
         )
     from openbricks_sim.physics import Physics
 
-    physics = Physics(world, args.chassis, args.seed, _start_pose(args, world))
+    physics = Physics(world, args.chassis or DEFAULT_CHASSIS, args.seed, _start_pose(args, world))
     try:
         started = time.perf_counter()
         physics.step(int(round(args.duration * 1000)))
@@ -367,8 +375,6 @@ def _run_contained(args, world, script) -> int:
         str(script),
         "--world",
         args.world,
-        "--chassis",
-        args.chassis,
         "--seed",
         str(args.seed),
         "--limit-ms",
@@ -389,6 +395,8 @@ def _run_contained(args, world, script) -> int:
         child_args += ["--speed", repr(float(args.speed))]
     if args.hub_dir is not None:
         child_args += ["--hub-dir", args.hub_dir]
+    if args.chassis is not None:  # else the child builds the robot the program describes
+        child_args += ["--chassis", args.chassis]
     if args.bare_0x29 is not None:
         child_args += ["--bare-0x29", args.bare_0x29]
     if args.viewer:
@@ -428,7 +436,7 @@ def _run_unshimmed(args, world, script, source) -> int:
 
     simulation = Simulation(
         world,
-        args.chassis,
+        args.chassis or DEFAULT_CHASSIS,
         args.seed,
         _start_pose(args, world),
         speed=args.speed,

@@ -1,10 +1,17 @@
 """How each chassis is wired to the simulated hub: the devices a program finds on its buses and pins.
 
 The serial-bus build (st3032) carries two ST-3032 servos on UART1 (TX 14,
-RX 41): id 1 drives the left wheel, id 2 the right one, mounted mirrored, so
-a program builds the right motor with invert=True exactly as on the real
-robot. The DC build (jgb37) has two JGB37-520 motors behind an L298N bridge
+RX 41). The DC build (jgb37) has two JGB37-520 motors behind an L298N bridge
 with their quadrature encoders on PCNT units, on the manual's GPIO map.
+
+A real robot is wired the way its program says, so the simulated one is too:
+the motor a program passes to DriveBase as `left` drives the left wheel, and
+the one it builds with `invert=True` is mounted mirrored (`place_wheels`). The
+chassis has exactly one mirrored side, as any robot with two identical motors
+facing outwards does: when a program inverts neither motor (or both), the
+right one stays mirrored and the robot does what that program would make the
+real one do (spin where it meant to drive straight). Until a DriveBase says
+otherwise, servo id 1 and the first bridge channel drive the left wheel.
 """
 
 from dataclasses import dataclass
@@ -12,9 +19,24 @@ from dataclasses import dataclass
 from .serial_bus import BusEngine, EmulatedServo, ServoBus
 
 SERVO_UART = 1
-SERVO_IDS = (1, 2)  # left, right, as the manual's examples assume
-# A wheel's joint turns forward-positive on both sides; the right motor is mounted mirrored.
-MOUNT_SIGNS = (1, -1)
+SERVO_IDS = (1, 2)  # left, right until the program's DriveBase places them
+LEFT, RIGHT = 0, 1
+# A wheel's joint turns forward-positive on both sides; a motor mounted mirrored sees it negated.
+DEFAULT_MIRRORED = RIGHT
+
+
+def mount_signs(left_invert=False, right_invert=True):
+    """(left, right) shaft-to-wheel signs of a chassis whose program inverts these motors.
+
+    The mirrored wheel is the one the program inverts; with neither or both inverted the chassis
+    keeps its default, so a self-contradicting program drives the way the real robot would."""
+    mirrored = DEFAULT_MIRRORED
+    if bool(left_invert) != bool(right_invert):
+        mirrored = LEFT if left_invert else RIGHT
+    return tuple(-1 if wheel == mirrored else 1 for wheel in (LEFT, RIGHT))
+
+
+MOUNT_SIGNS = mount_signs()
 
 
 @dataclass(frozen=True)
@@ -36,23 +58,34 @@ class SerialBusWiring:
     def __init__(self, physics, board, world_process):
         motor = physics.chassis.motor
         self.bus = ServoBus()
-        self.wheel_of = {}  # servo id -> wheel index
         for wheel, (servo_id, sign) in enumerate(zip(SERVO_IDS, MOUNT_SIGNS, strict=True)):
             io = physics.wheel_io(wheel, sign)
             self.bus.add(
                 EmulatedServo(servo_id, io, world_process, motor.no_load_speed_dps, motor.stall_torque_nm)
             )
-            self.wheel_of[servo_id] = wheel
         board.attach_uart(SERVO_UART, self.bus)
         self._physics = physics
         self.engine = BusEngine(self.bus, self._engine_io, f"UART{SERVO_UART} tx=14 rx=41")
 
     def _engine_io(self, servo, invert):
-        wheel = self.wheel_of.get(servo.servo_id)
-        if wheel is None:  # re-IDed after wiring: find it by its IO
-            wheel = servo.io.wheel
-        sign = MOUNT_SIGNS[wheel] * (-1 if invert else 1)
-        return self._physics.wheel_io(wheel, sign)
+        io = servo.io  # the shaft: its wheel, and how the servo is mounted on it
+        return self._physics.wheel_io(io.wheel, io.sign * (-1 if invert else 1))
+
+    def place_wheels(self, left, right):
+        """Mount the servos the program's DriveBase names: `left`/`right` = ((uart_id, servo_id), invert).
+
+        Servos already adopted by an earlier drive base stay where they are (the robot is built);
+        a servo this robot does not carry (or another kind of motor) is left to its driver."""
+        servos = [
+            self.bus.servos.get(key[1]) if isinstance(key, tuple) and key[0] == SERVO_UART else None
+            for key in (left[0], right[0])
+        ]
+        if None in servos or servos[0] is servos[1] or any(s.adopted_by is not None for s in servos):
+            return
+        signs = mount_signs(left[1], right[1])
+        for wheel, servo in enumerate(servos):
+            if (servo.io.wheel, servo.io.sign) != (wheel, signs[wheel]):
+                servo.mount(self._physics.wheel_io(wheel, signs[wheel]))
 
     def serial_bus(self, uart_id):
         if uart_id != SERVO_UART:
@@ -68,8 +101,8 @@ class _Bridge:
 
     def __init__(self, board, io, channel):
         self._board = board
-        self._io = io
-        self._channel = channel
+        self.io = io  # the wheel this channel's motor turns (BridgeWiring mounts it)
+        self.channel = channel
         self._enable = 0.0
         for pin in (channel.in1, channel.in2):
             board.watch_output(pin, self._changed)
@@ -84,25 +117,44 @@ class _Bridge:
         self._changed(_pin, value)
 
     def _changed(self, _pin, _value):
-        in1, in2 = self._level(self._channel.in1), self._level(self._channel.in2)
+        in1, in2 = self._level(self.channel.in1), self._level(self.channel.in2)
         if self._enable <= 0.0 or (in1 == 0 and in2 == 0):
-            self._io.coast()
+            self.io.coast()
         elif in1 and in2:
-            self._io.write_duty(0.0)  # both low sides on: the winding is shorted
+            self.io.write_duty(0.0)  # both low sides on: the winding is shorted
         else:
-            self._io.write_duty(100.0 * self._enable * (1 if in1 else -1))
+            self.io.write_duty(100.0 * self._enable * (1 if in1 else -1))
 
 
 class BridgeWiring:
     """Two JGB37-520s behind an L298N, encoders on PCNT."""
 
     def __init__(self, physics, board, world_process):
-        counts = physics.chassis.motor.counts_per_rev
+        self._physics = physics
+        self._board = board
         self.bridges = []
         for wheel, (channel, sign) in enumerate(zip(JGB37_CHANNELS, MOUNT_SIGNS, strict=True)):
-            io = physics.wheel_io(wheel, sign, counts)
-            self.bridges.append(_Bridge(board, io, channel))
-            board.set_encoder(channel.encoder_a, _edges(io, counts))
+            self.bridges.append(_Bridge(board, None, channel))
+            self._mount(self.bridges[-1], wheel, sign)
+
+    def _mount(self, bridge, wheel, sign):
+        counts = self._physics.chassis.motor.counts_per_rev
+        bridge.io = self._physics.wheel_io(wheel, sign, counts)
+        self._board.set_encoder(bridge.channel.encoder_a, _edges(bridge.io, counts))
+
+    def place_wheels(self, left, right):
+        """Mount the motors the program's DriveBase names: `left`/`right` = (encoder_a_pin, invert).
+
+        The motors passed to DriveBase decide which wheel is which, not their pin numbers."""
+        by_pin = {bridge.channel.encoder_a: bridge for bridge in self.bridges}
+        bridges = [by_pin.get(pin) if isinstance(pin, int) else None for pin, _ in (left, right)]
+        if None in bridges or bridges[0] is bridges[1]:
+            return
+        signs = mount_signs(left[1], right[1])
+        for wheel, bridge in enumerate(bridges):
+            if (bridge.io.wheel, bridge.io.sign) != (wheel, signs[wheel]):
+                bridge.io.coast()
+                self._mount(bridge, wheel, signs[wheel])
 
     def serial_bus(self, uart_id):
         raise OSError(f"the simulated DC-motor robot has no serial-bus servos (UART{uart_id})")

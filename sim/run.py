@@ -34,6 +34,7 @@ from . import limits
 from .cli import limit_argument, seed_argument
 from .clock import SimStopped, SimTimeLimit
 from .limits import DEFAULT_MEMORY_MB, CpuLimitExceeded, contain, default_cpu_s, default_wall_s
+from .program_robot import ProgramRobot, infer_chassis
 from .run_flash import HubDirError, RunFlash, prepare_hub_dir
 from .sensors.rig import BARE_0X29, RANGE_FINDERS
 from .shim import Shim
@@ -129,7 +130,7 @@ class ProgramRun:
         saved_streams = sys.stdout, sys.stderr
         started = time.perf_counter()
         try:
-            with Shim(sim), RunFlash(self.hub_dir) as flash:
+            with Shim(sim), RunFlash(self.hub_dir) as flash, ProgramRobot(sim):
                 sys.stdout = sys.stderr = output
                 if watchdog is not None:
                     watchdog.start()
@@ -239,7 +240,7 @@ def report(result, stream=None) -> None:
 def run_program(
     program,
     world="empty",
-    chassis="st3032",
+    chassis=None,
     seed=0,
     start_mm_deg=None,
     speed=None,
@@ -253,6 +254,8 @@ def run_program(
 ) -> RunResult:
     """Run the program file `program` (or `source`, named `program`) and return its RunResult.
 
+    chassis: "st3032" or "jgb37"; None builds the robot whose motors the program constructs.
+
     hub_dir: the hub's flash directory, kept after the run (None: a temporary one, removed).
     range_finder, bare_0x29: the sensor rig's parts (sensors/rig.py): "vl53l0x" or "vl53l1x" on the
     mux; and the one 0x29 part wired straight to the I2C bus without a mux, if any.
@@ -260,6 +263,8 @@ def run_program(
     if source is None:
         with open(program, encoding="utf-8") as f:
             source = f.read()
+    if chassis is None:
+        chassis = infer_chassis(source)
     hub_dir = prepare_hub_dir(hub_dir)
     job = {
         "program": os.fspath(program),
@@ -319,7 +324,10 @@ def main(argv=None) -> int:
     )
     parser.add_argument("program", help="the program file, as you would run it on the hub")
     parser.add_argument("--world", default="empty", help="world alias or MJCF file (default: empty)")
-    parser.add_argument("--chassis", default="st3032", help="st3032 or jgb37 (default: st3032)")
+    parser.add_argument(
+        "--chassis",
+        help="st3032 or jgb37 (default: the build whose motors the program constructs, else st3032)",
+    )
     parser.add_argument("--seed", type=seed_argument, default=0)
     parser.add_argument("--start", type=float, nargs=3, metavar=("X_MM", "Y_MM", "HEADING_DEG"))
     parser.add_argument(

@@ -95,15 +95,29 @@ class EmulatedServo:
         self.adopted_by = None  # the BusEngine driving this servo's bridge directly
         self._world = world_process
         self._target_steps = 0.0  # position / step mode destination, shaft steps
+        self.servo = None
+        self.mount(wheel_io)
+
+    def mount(self, wheel_io):
+        """Put the servo's shaft on `wheel_io` (a wheel, in the shaft's frame): the robot is built.
+
+        The simulator mounts each servo where the program's DriveBase says it sits (robot.py), so
+        the servo's firmware starts over on the new shaft with the settings its registers hold."""
+        if self.servo is not None and self.adopted_by is None:
+            self._world.unsubscribe(self.servo)
+        self.io = wheel_io
         self.servo = openbricks_native.Servo(
             io=wheel_io,
             counts_per_rev=STEPS_PER_REV,
-            max_speed_dps=no_load_dps,
+            max_speed_dps=self.no_load_dps,
             accel_dps2=_UNLIMITED_ACCEL_DPS2,
             decel_dps2=_UNLIMITED_ACCEL_DPS2,
         )
         self.servo.coast()
-        world_process.subscribe(self.servo)
+        wheel_io.silent = self.silent
+        if self.adopted_by is None:
+            self._configure()
+            self._world.subscribe(self.servo)
 
     @property
     def servo_id(self):
@@ -183,11 +197,8 @@ class EmulatedServo:
 
         if self.adopted_by is not None:
             return  # the engine owns the bridge; registers are kept but not acted on
-        if touched(REG_TORQUE_LIMIT, 2):
-            self.servo.set_duty_limit(max(0.1, min(100.0, self._get16(REG_TORQUE_LIMIT) / 10)))
-        if touched(REG_ACC) or touched(REG_GOAL_SPEED, 2):
-            accel = self._accel_dps2()
-            self.servo.settings(accel_dps2=accel, decel_dps2=accel, max_speed_dps=self._speed_cap_dps())
+        if touched(REG_TORQUE_LIMIT, 2) or touched(REG_ACC) or touched(REG_GOAL_SPEED, 2):
+            self._configure()
         if touched(REG_MODE):
             self._target_steps = self._position_steps()  # a fresh mode starts from where the shaft is
         if touched(REG_GOAL_POSITION, 2):
@@ -208,6 +219,12 @@ class EmulatedServo:
             or (touched(REG_GOAL_POSITION, 2) or touched(REG_GOAL_TIME, 2))
         ):
             self._apply()
+
+    def _configure(self):
+        """Apply the torque limit, acceleration and speed registers to the servo's loop."""
+        self.servo.set_duty_limit(max(0.1, min(100.0, self._get16(REG_TORQUE_LIMIT) / 10)))
+        accel = self._accel_dps2()
+        self.servo.settings(accel_dps2=accel, decel_dps2=accel, max_speed_dps=self._speed_cap_dps())
 
     def _apply(self):
         """Run what the mode and goal registers ask for (or coast with torque off)."""

@@ -15,7 +15,7 @@ import openbricks_native
 from .clock import SimClock
 from .physics import Physics
 from .robot import wire
-from .sensors.rig import attach_sensors
+from .sensors.rig import I2C_BUS, attach_sensors, wire_bare_colour_sensor
 from .shim.board import SimBoard
 
 
@@ -52,6 +52,14 @@ class Simulation:
         except BaseException:
             self.physics.close()
             raise
+
+    def wire_bare_colour_sensor(self, i2c_key):
+        """The program built a TCS34725 straight on I2C bus `i2c_key`: wire one there (bus 0 only).
+
+        False when the rig already has another part at 0x29 on that bus (--bare-0x29 said so)."""
+        if i2c_key != I2C_BUS:
+            return True
+        return wire_bare_colour_sensor(self.sensors, self.physics, self.board, self.physics.seed)
 
     def serial_bus(self, uart_id):
         """`_openbricks_native.serial_bus(uart_id)`: the engine a DriveBase adopts serial-bus wheels onto."""

@@ -101,7 +101,7 @@ def attach_sensors(physics, board, seed: int = 0, range_finder="vl53l0x", bare_0
     if bare_0x29 in RANGE_FINDERS:
         range_finder = bare_0x29
     elif bare_0x29 == "tcs34725":
-        bare = TCS34725Model(probe, color_site(0), now_us, seed=seed * 101 + 9)
+        bare = _bare_colour_sensor(probe, now_us, seed)
     ray = ForwardRay(model, data)
     if range_finder == "vl53l0x":
         ranger = VL53L0XModel(ray, now_us, seed=seed * 101 + 30)
@@ -137,6 +137,23 @@ def attach_sensors(physics, board, seed: int = 0, range_finder="vl53l0x", bare_0
         board.set_analog(pin, qtr.channel(pin).read)
 
     return Sensors(colours, mux, qtr, icm, bno, ranger, bare, sonar, imu_spi)
+
+
+def _bare_colour_sensor(probe, now_us, seed):
+    return TCS34725Model(probe, color_site(0), now_us, seed=seed * 101 + 9)
+
+
+def wire_bare_colour_sensor(sensors, physics, board, seed=0) -> bool:
+    """Wire a TCS34725 straight to the I2C bus at 0x29, over color_0, as a program that builds one
+    on the bare bus describes (the manual's one-colour-sensor robot). False, changing nothing, when
+    a part already sits there (the rig was told what is bare)."""
+    bus = board.i2c_devices.setdefault(I2C_BUS, {})
+    if sensors.bare_0x29 is not None or SHARED_ADDRESS in bus:
+        return isinstance(sensors.bare_0x29, TCS34725Model)
+    sensors.bare_0x29 = bus[SHARED_ADDRESS] = _bare_colour_sensor(
+        GroundProbe(physics.model, physics.data), board.clock.now_us, seed
+    )
+    return True
 
 
 def _colour_sites(model) -> int:

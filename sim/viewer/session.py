@@ -13,6 +13,7 @@ import sys
 import time
 from collections.abc import Callable
 
+from ..program_robot import infer_chassis
 from ..run import STOPPED, ProgramRun, RunResult
 from ..simulation import Simulation
 from .viewer import DEFAULT_HOST, DEFAULT_PORT, SimViewer
@@ -21,7 +22,7 @@ from .viewer import DEFAULT_HOST, DEFAULT_PORT, SimViewer
 def serve_run(
     program,
     world: str = "empty",
-    chassis: str = "st3032",
+    chassis: str | None = None,
     seed: int = 0,
     start_mm_deg=None,
     speed: float | None = 1.0,
@@ -51,6 +52,8 @@ def serve_run(
     if source is None:
         with open(program, encoding="utf-8") as f:
             source = f.read()
+    if chassis is None:
+        chassis = infer_chassis(source)
     filename = os.path.basename(os.fspath(program))
     job = {
         "program": os.fspath(program),

@@ -18,9 +18,12 @@ pytestmark = pytest.mark.e2e
 
 
 def run_example(
-    program, tmp_path, world="empty", start=None, limit_ms=60_000, hub_dir=None, chassis="st3032"
+    program, tmp_path, world="empty", start=None, limit_ms=60_000, hub_dir=None, chassis=None, exit="finished"
 ):
-    """`python -m openbricks_sim.run PROGRAM --json` in a fresh process; returns the parsed result."""
+    """`python -m openbricks_sim.run PROGRAM --json` in a fresh process; returns the parsed result.
+
+    chassis None lets the simulator build the robot the program describes; `exit` is how the run
+    must end ("time_limit" to look at the robot part-way)."""
     import openbricks_mjcontrol
 
     import openbricks_native
@@ -39,9 +42,9 @@ def run_example(
         world,
         "--limit-ms",
         str(limit_ms),
-        "--chassis",
-        chassis,
     ]
+    if chassis is not None:
+        command += ["--chassis", chassis]
     if start is not None:
         command += ["--start", *(str(v) for v in start)]
     if hub_dir is not None:
@@ -49,7 +52,7 @@ def run_example(
     out = subprocess.run(command, capture_output=True, text=True, timeout=300, env=env, cwd=tmp_path)
     assert out.stdout, out.stderr
     result = json.loads(out.stdout.strip().splitlines()[-1])
-    assert result["exit"] == "finished", result["error"] or result["output"]
+    assert result["exit"] == exit, result["error"] or result["output"]
     return result
 
 
@@ -156,7 +159,9 @@ def test_colour_array_names_the_bands_it_crosses_on_the_way_to_red(tmp_path):
 
 
 def test_dc_build_square_closes_on_its_start_and_the_gyro_agrees(tmp_path):
-    result = run_example(EXAMPLES / "esp32_drivebase.py", tmp_path, chassis="jgb37")
+    # No --chassis: the program's JGB37Motor drivers choose the DC build.
+    result = run_example(EXAMPLES / "esp32_drivebase.py", tmp_path)
+    assert result["job"]["chassis"] == "jgb37"
     pose = result["pose"]
     assert math.hypot(pose["x_mm"], pose["y_mm"]) < 10.0
     assert heading_error_deg(pose["heading_deg"], 0.0) < 2.0
