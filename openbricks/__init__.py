@@ -12,6 +12,21 @@ PROVENANCE_KEY = "provenance"
 _VERDICTS = ("official", "customized")
 
 
+def _flashed_hub_name():
+    """The name `openbricks flash --name` wrote to NVS, or None (no name, or no NVS on this build)."""
+    try:
+        from openbricks.bluetooth import hub_name
+
+        return hub_name()
+    except (ImportError, AttributeError, OSError, ValueError):
+        return None
+
+
+# The hub's name (manual 7.8: NVS-backed), read once at boot; BLE refuses to advertise without one.
+# host_calls.set_hub_name() keeps it current when the host renames the hub.
+HUB_NAME = _flashed_hub_name()
+
+
 def provenance():
     """ "official" when the flasher verified this exact version's signature, else "customized"."""
     try:

@@ -579,7 +579,8 @@ def _set_hub_name(hub_name):
     nvs = esp32.NVS(bluetooth.NVS_NAMESPACE)
     nvs.set_blob(bluetooth.NVS_KEY_HUB_NAME, hub_name.encode())
     nvs.commit()
-    return {"hub_name": bluetooth.hub_name()}  # read back from NVS, so the host can verify it
+    openbricks.HUB_NAME = bluetooth.hub_name()  # read back from NVS, so the host can verify it
+    return {"hub_name": openbricks.HUB_NAME}
 
 
 def set_hub_name(hub_name):

@@ -117,7 +117,7 @@ class SimpleLED(StatusLED):
     def __init__(self, pin, active_high=True, owner=None, hint=""):
         import machine
 
-        pins.claim(pin, "status LED", self if owner is None else owner, True, hint)
+        pins.claim(pin, "status LED", hint, self if owner is None else owner, True)
         self._pin_id = pin
         self._active_high = bool(active_high)
         self._pin = machine.Pin(pin, machine.Pin.OUT, value=0 if self._active_high else 1)
@@ -148,7 +148,7 @@ class NeoPixelLED(StatusLED):
 
         if not 0.0 <= brightness <= 1.0:
             raise ValueError("brightness must be 0.0-1.0, got %r" % (brightness,))
-        pins.claim(pin, "status LED", self if owner is None else owner, True, hint)
+        pins.claim(pin, "status LED", hint, self if owner is None else owner, True)
         self._brightness = brightness
         self._colour = (255, 255, 255)
         self._pixel = neopixel.NeoPixel(machine.Pin(pin, machine.Pin.OUT), 1)
@@ -178,7 +178,7 @@ class PushButton(Button):
     def __init__(self, pin, active_low=True, role="button", owner=None, hint=""):
         import machine
 
-        pins.claim(pin, role, self if owner is None else owner, False, hint)
+        pins.claim(pin, role, hint, self if owner is None else owner, False)
         self._active_low = bool(active_low)
         pull = machine.Pin.PULL_UP if self._active_low else machine.Pin.PULL_DOWN
         self._pin = machine.Pin(pin, machine.Pin.IN, pull)

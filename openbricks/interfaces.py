@@ -254,3 +254,10 @@ class ColorSensor:
     def ambient(self):
         """Clear-channel intensity, 0..100."""
         raise _unsupported(self, "ambient")
+
+    def reflection(self):
+        """Reflected light, 0..100 (Pybricks' ColorSensor.reflection()).
+
+        A colour breakout lights the surface with its own white LED (manual 2.4.1: leave it on), so
+        what its clear channel sees is the light the surface reflects: ambient() on that scale."""
+        return self.ambient()

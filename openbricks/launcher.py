@@ -3,7 +3,8 @@
 Button semantics (one GPIO, every press means start-or-stop):
 
 - idle: a full press-release starts the program, on release, unless a stop happened less than
-  START_LOCKOUT_MS ago (the bounce of the stopping press must not restart the robot);
+  START_LOCKOUT_MS ago (the bounce of the stopping press must not restart the robot); the starting
+  press's own chatter is consumed (START_PRESS_OPEN_MS, RELEASE_CHATTER_MS);
 - running: the stop fires on press-down. The e-stop latch engages first (motors halt, motion
   commands raise), then a KeyboardInterrupt is injected and re-injected every STOP_RETRY_MS until the
   program is actually dead: a user `try/except` may swallow one, and on the ESP32 a timer callback
@@ -52,12 +53,6 @@ DEFAULT_PROGRAM_PATH = "/program.mpy"
 DEFAULT_BUTTON_PIN = 39
 DEFAULT_POLL_MS = 50
 DEFAULT_TIMER_ID = 0
-
-DEBOUNCE_TICKS = 2  # a level must hold this many polls in a row to count as a press or release
-START_LOCKOUT_MS = 500  # after a stop, presses are ignored this long (the stopping press bounces)
-RUN_START_GRACE_MS = 400  # a press this soon after a start is the starting press's chatter
-STOP_RETRY_MS = 300  # the interrupt is re-requested this often until the program is dead
-STARVE_NOTE_MS = 5000  # a gap this long between ticks is worth a line in the run log
 
 _running = [False]  # hub-wide "a program is running", read by the status LED on every tick
 _listeners = []
@@ -259,27 +254,52 @@ def _execute(path):
 
 
 class Launcher:
-    """The program-button watcher and the run wrapper; one per hub (see `get()`)."""
+    """The program-button watcher and the run wrapper; one per hub (see `get()`).
+
+    `button` is the program button's GPIO number (claimed, input with pull-up), or a Pin-like object
+    with value() (pressed reads 0) that the caller wired itself. The timing constants below are
+    class attributes, so a hub with a bouncier button can subclass and change them.
+    """
+
+    DEBOUNCE_TICKS = 2  # a level must hold this many polls in a row to count as a press or release
+    START_LOCKOUT_MS = 500  # after a stop, presses are ignored this long (the stopping press bounces)
+    RUN_START_GRACE_MS = 400  # a press this soon after a start is the starting press's chatter
+    STOP_RETRY_MS = 300  # the interrupt is re-requested this often until the program is dead
+    STARVE_NOTE_MS = 5000  # a gap this long between ticks is worth a line in the run log
+    # After the release that starts a program, further releases this soon are that press's chatter:
+    # they never queue a second start (a program that ends at once must not be started again).
+    START_PRESS_OPEN_MS = 600
+    # ... and a press this soon after that release is its chatter too, not a stop of the new run.
+    RELEASE_CHATTER_MS = 500
 
     def __init__(
         self,
-        button_pin=DEFAULT_BUTTON_PIN,
+        button=DEFAULT_BUTTON_PIN,
         program_path=DEFAULT_PROGRAM_PATH,
         poll_ms=DEFAULT_POLL_MS,
         log_dir=log.LOG_DIR,
         interrupt=None,
     ):
-        pins.claim(
-            button_pin,
-            "program button",
-            "launcher",
-            output=False,
-            hint="pass button_pin= to launcher.run() to move the program button",
-        )
-        # Input with pull-up, pressed = 0. The classic ESP32's GPIO 34-39 have no internal pull-up:
-        # wire an external 10 kOhm one there.
-        self._button = machine.Pin(button_pin, machine.Pin.IN, machine.Pin.PULL_UP)
-        self.button_pin = button_pin
+        if isinstance(button, int):
+            pins.claim(
+                button,
+                "program button",
+                "pass button_pin= to launcher.run() to move the program button",
+                owner="launcher",
+                output=False,
+            )
+            # Input with pull-up, pressed = 0. The classic ESP32's GPIO 34-39 have no internal
+            # pull-up: wire an external 10 kOhm one there.
+            self._button = machine.Pin(button, machine.Pin.IN, machine.Pin.PULL_UP)
+            self.button_pin = button
+        elif callable(getattr(button, "value", None)):
+            self._button = button
+            self.button_pin = None  # the caller's pin: nothing claimed, nothing to release
+        else:
+            raise TypeError(
+                "Launcher(button=%r): give the program button's GPIO number, or a Pin whose value() "
+                "reads 0 while pressed" % (button,)
+            )
         self.program_path = program_path
         self.poll_ms = poll_ms
         self.log_dir = log_dir
@@ -296,6 +316,7 @@ class Launcher:
         self._last_attempt_ms = None
         self._stop_retries = 0
         self._last_tick_ms = None
+        self._start_released_ms = None  # the release that queued the last start
         self._halts_mark = None  # estop.mark() of the running program, until its hardware is released
 
     # -- the watcher (timer callback context) ------------------------------------------------
@@ -318,7 +339,7 @@ class Launcher:
         try:
             if self._last_tick_ms is not None and _running[0]:
                 gap = time.ticks_diff(now, self._last_tick_ms)
-                if gap >= STARVE_NOTE_MS:
+                if gap >= self.STARVE_NOTE_MS:
                     log.note(
                         "watcher tick starved for %d ms (slowest log write %d ms)"
                         % (gap, log.worst_write_ms())
@@ -330,12 +351,12 @@ class Launcher:
                 self._flips = 0
             else:
                 self._flips += 1
-                if self._flips >= DEBOUNCE_TICKS:
+                if self._flips >= self.DEBOUNCE_TICKS:
                     self._flips = 0
                     self._down = down
                     interrupt = self._on_press(now) if down else self._on_release(now)
             if not interrupt and _running[0] and self._stop_pressed_ms is not None:
-                if time.ticks_diff(now, self._last_attempt_ms) >= STOP_RETRY_MS:
+                if time.ticks_diff(now, self._last_attempt_ms) >= self.STOP_RETRY_MS:
                     _event(now, "stop retry")
                     self._stop_retries += 1
                     self._last_attempt_ms = now
@@ -344,6 +365,11 @@ class Launcher:
             print("launcher: watcher tick failed: %r" % (exc,))
         if interrupt:
             self._interrupt()
+
+    def _since_start_release(self, now, window_ms):
+        """True within `window_ms` of the release that queued the last start."""
+        released = self._start_released_ms
+        return released is not None and time.ticks_diff(now, released) < window_ms
 
     def _locked_out(self, now):
         return self._lockout_until_ms is not None and time.ticks_diff(self._lockout_until_ms, now) > 0
@@ -357,8 +383,11 @@ class Launcher:
         if self._stop_pressed_ms is not None:
             _event(now, "press while stopping: ignored")
             return False
-        if self._started_ms is not None and time.ticks_diff(now, self._started_ms) < RUN_START_GRACE_MS:
+        if self._started_ms is not None and time.ticks_diff(now, self._started_ms) < self.RUN_START_GRACE_MS:
             _event(now, "press within the start grace: ignored")
+            return False
+        if self._since_start_release(now, self.RELEASE_CHATTER_MS):
+            _event(now, "press within the start release's chatter: ignored")
             return False
         _event(now, "press -> stop")
         _acknowledge(True)
@@ -381,16 +410,20 @@ class Launcher:
         self._press_stops = False
         if stopping_press:
             # The contacts bounce as the stopping press lets go: keep starts shut a while longer.
-            self._lockout_until_ms = time.ticks_add(now, START_LOCKOUT_MS)
+            self._lockout_until_ms = time.ticks_add(now, self.START_LOCKOUT_MS)
             _event(now, "release of a stopping press")
             return False
         if _running[0] or self._locked_out(now):
             _event(now, "release: ignored (%s)" % ("running" if _running[0] else "locked out"))
             return False
+        if self._since_start_release(now, self.START_PRESS_OPEN_MS):
+            _event(now, "release: chatter of the start press, ignored")
+            return False
         if self._idling:
             _event(now, "release -> start")
             _acknowledge(False)
             self._start_requested = True
+            self._start_released_ms = now
         else:
             _event(now, "release: start refused, console session")
             print(
@@ -402,7 +435,7 @@ class Launcher:
     def note_external_stop(self):
         """Arm the start lockout for a stop that did not come from this watcher (a console Ctrl-C),
         so the echoes of that stop can't read as a fresh start press."""
-        self._lockout_until_ms = time.ticks_add(time.ticks_ms(), START_LOCKOUT_MS)
+        self._lockout_until_ms = time.ticks_add(time.ticks_ms(), self.START_LOCKOUT_MS)
         self._press_stops = self._down
 
     # -- running a program (main thread) ------------------------------------------------------
@@ -458,7 +491,7 @@ class Launcher:
                 estop.clear(halts)
                 pins.release_since(claims)
                 if self._stop_pressed_ms is not None:
-                    self._lockout_until_ms = time.ticks_add(time.ticks_ms(), START_LOCKOUT_MS)
+                    self._lockout_until_ms = time.ticks_add(time.ticks_ms(), self.START_LOCKOUT_MS)
                 self._stop_pressed_ms = None
                 self._started_ms = None
         gc.collect()
@@ -544,7 +577,8 @@ def shutdown():
     _launcher[0] = None
     if launcher._timer is not None:
         launcher._timer.deinit()
-    pins.release(launcher.button_pin, "launcher")
+    if launcher.button_pin is not None:
+        pins.release(launcher.button_pin, "launcher")
 
 
 def reset_state():

@@ -183,13 +183,20 @@ def _same_owner(a, b):
     return a is b or (isinstance(a, str) and a == b)
 
 
-def claim(pin, role, owner, output=True, hint=""):
-    """Take `pin` for `role` on behalf of `owner` (a name or the driver object itself).
+# Who holds a pin claimed without an owner: the firmware runtime itself (a button it wires at boot).
+RUNTIME_OWNER = "the firmware runtime"
 
+
+def claim(pin, role, hint="", owner=None, output=True):
+    """Take `pin` for `role` (manual 7.8.1: `claim(pin, role, hint="")`).
+
+    `owner` is who holds it, a name or the driver object itself; None means the firmware runtime.
     Raises ReservedPinError for a chip-reserved pin or one held by a different owner. Claiming again
     for the same owner is allowed (a driver re-initialising). `hint` tells a later claimant how to
-    move this owner elsewhere, e.g. "pass button_pin= to Launcher()".
+    move this owner elsewhere, e.g. "pass button_pin= to Launcher()". `output`: see check().
     """
+    if owner is None:
+        owner = RUNTIME_OWNER
     check(pin, role, output, owner)
     _claims[pin] = (role, owner, hint)
 

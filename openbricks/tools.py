@@ -16,15 +16,15 @@ _plot_tag = [None]
 _WAIT_SLICE_MS = 20
 
 
-def wait(ms):
-    """Pause the program for `ms` milliseconds (negative or zero returns at once).
+def wait(milliseconds):
+    """Pause the program for `milliseconds` (negative or zero returns at once), as Pybricks' wait().
 
     Raises EStopError as soon as the stop button engages the e-stop.
     """
     estop.check("wait()")
-    if ms <= 0:
+    if milliseconds <= 0:
         return
-    deadline = time.ticks_add(time.ticks_ms(), int(ms))
+    deadline = time.ticks_add(time.ticks_ms(), int(milliseconds))
     while True:
         left = time.ticks_diff(deadline, time.ticks_ms())
         if left <= 0:

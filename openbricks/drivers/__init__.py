@@ -19,7 +19,7 @@ def claim_pins(owner, claims):
                     raise ValueError(
                         "%s and %s are both GPIO %s; each signal needs its own pin" % (other_role, role, pin)
                     )
-            pins.claim(pin, role, owner, output)
+            pins.claim(pin, role, owner=owner, output=output)
             taken.append((pin, role))
     except Exception:
         release_pins(owner, [pin for pin, _role in taken])

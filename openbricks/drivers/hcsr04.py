@@ -25,8 +25,8 @@ class HCSR04(DistanceSensor):
     """Ultrasonic range finder on GPIOs `trig` and `echo`; `timeout_us` bounds the wait for an echo."""
 
     def __init__(self, trig, echo, timeout_us=_DEFAULT_TIMEOUT_US):
-        pins.claim(trig, "HC-SR04 TRIG output", self)
-        pins.claim(echo, "HC-SR04 ECHO input", self, output=False)
+        pins.claim(trig, "HC-SR04 TRIG output", owner=self)
+        pins.claim(echo, "HC-SR04 ECHO input", owner=self, output=False)
         self._trig = Pin(trig, Pin.OUT, value=0)
         self._echo = Pin(echo, Pin.IN)
         self._timeout_us = timeout_us

@@ -78,10 +78,10 @@ class ICM45686(HeadingFrame):
             raise ValueError("scale must be non-zero: -1.0 for a face-up ICM-45686, +1.0 face-down")
         if mode not in (0, 1, 2, 3):
             raise ValueError("SPI mode is 0..3, got %r" % (mode,))
-        pins.claim(sck, "ICM-45686 SPI SCK", self)
-        pins.claim(mosi, "ICM-45686 SPI MOSI", self)
-        pins.claim(miso, "ICM-45686 SPI MISO", self, output=False)
-        pins.claim(cs, "ICM-45686 SPI CS", self)
+        pins.claim(sck, "ICM-45686 SPI SCK", owner=self)
+        pins.claim(mosi, "ICM-45686 SPI MOSI", owner=self)
+        pins.claim(miso, "ICM-45686 SPI MISO", owner=self, output=False)
+        pins.claim(cs, "ICM-45686 SPI CS", owner=self)
         self._cs = Pin(cs, Pin.OUT, value=1)
         self._spi = SPI(
             spi_id,

@@ -479,7 +479,7 @@ class QTRLineSensor(QTRArray):
 
 def _claim(pin, role, owner, output=True):
     # Module-level on purpose: inside QTRArray.__init__ the name `pins` is the caller's pin tuple.
-    pins.claim(pin, role, owner, output=output)
+    pins.claim(pin, role, owner=owner, output=output)
 
 
 def _first_dark(values, threshold):

@@ -157,10 +157,10 @@ class _SCServoBus:
 
     def _claim_pins(self):
         name = "servo bus UART%d" % self.uart_id
-        pins.claim(self.tx, name + " TX", name)
-        pins.claim(self.rx, name + " RX", name, output=False)
+        pins.claim(self.tx, name + " TX", owner=name)
+        pins.claim(self.rx, name + " RX", owner=name, output=False)
         if self.dir_pin is not None:
-            pins.claim(self.dir_pin, name + " direction", name)
+            pins.claim(self.dir_pin, name + " direction", owner=name)
 
     def where(self):
         return "UART%d tx=%s rx=%s" % (self.uart_id, self.tx, self.rx)
@@ -514,6 +514,33 @@ class ST3215Motor(_BusServo, Motor):
         estop.on_engage(self.coast)  # torque off: instant, not ramped like brake()
 
     # --- adoption by a DriveBase -------------------------------------------------
+
+    @classmethod
+    def migrate_bus_to_native(cls, bus, skip=()):
+        """Move every motor still on `bus` onto native slots; returns the motors moved.
+
+        DriveBase calls this right after it adopts its wheels, which hands the UART to the bus
+        engine: anything else sharing the chain (an arm, a spare wheel) has to come across too or
+        it is left talking into a closed UART. `skip` lists motors to leave alone (the wheels,
+        already adopted). Position-mode servos (no adopt()) stay put and say so when used.
+        """
+        port = None
+        for device in bus.devices:
+            port = getattr(device, "_port", None)
+            if port is not None:
+                break
+        if port is None:
+            raise RuntimeError(
+                "UART%d is not on a bus engine yet: a DriveBase adopts its wheels first, and this "
+                "then moves the rest of the chain" % bus.uart_id
+            )
+        moved = []
+        for device in bus.devices:
+            if device in skip or not hasattr(device, "adopt") or port.slot_of(device) is not None:
+                continue
+            port.adopt(device)
+            moved.append(device)
+        return moved
 
     def adopt(self, port, slot):
         """Route this motor's Motor calls through `port` (the owner of the UART now), as `slot`.

@@ -19,7 +19,7 @@ class WS2812:
     def __init__(self, pin, n=8, brightness=0.2):
         if not isinstance(n, int) or n < 1:
             raise ValueError("WS2812 needs n >= 1 LEDs, got %r" % (n,))
-        pins.claim(pin, "WS2812 data output", self)
+        pins.claim(pin, "WS2812 data output", owner=self)
         self._pin = pin
         self._n = n
         self._colors = bytearray(3 * n)  # unscaled r, g, b per LED

@@ -174,8 +174,8 @@ class SerialBusPair(_Pair):
                     )
                 )
         self.wheels = tuple(_adopt(motor, serial_bus) for motor in self.motors)
-        for port, _slot in self.wheels:
-            _adopt_rest_of_chain(port)
+        for motor in self.motors:
+            type(motor).migrate_bus_to_native(motor.bus, skip=self.motors)
         for i, side in enumerate(SIDES):
             self.motors[i].set_label(side + " wheel", self.wheels[i][1])
         self._await_first_readings()
@@ -262,14 +262,6 @@ def _adopt(motor, serial_bus):
     if slot is None:
         slot = port.adopt(motor)
     return port, slot
-
-
-def _adopt_rest_of_chain(port):
-    """Adopt every other motor on the port's bus: with the UART handed over, a motor left behind would
-    be talking into a closed UART. Position-mode servos (no adopt()) say so clearly when used."""
-    for device in port.bus.devices:
-        if hasattr(device, "adopt") and port.slot_of(device) is None:
-            port.adopt(device)
 
 
 def _engine_factory(motor):

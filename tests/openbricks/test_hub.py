@@ -109,7 +109,7 @@ def test_the_button_pin_has_an_internal_pull_up():
 def test_a_driver_on_the_ble_button_pin_is_told_who_owns_it():
     ESP32S3DevkitHub(bluetooth=False)
     with raises(pins.ReservedPinError, "in use as the Bluetooth button") as err:
-        pins.claim(38, "QTR channel 1", "QTRLineSensor")
+        pins.claim(38, "QTR channel 1", owner="QTRLineSensor")
     assert "ESP32S3DevkitHub" in str(err.value)
     assert "bluetooth_button_pin=" in str(err.value)
 
@@ -117,32 +117,32 @@ def test_a_driver_on_the_ble_button_pin_is_told_who_owns_it():
 def test_a_driver_on_the_led_pin_is_told_who_owns_it():
     ESP32S3DevkitHub(bluetooth=False)
     with raises(pins.ReservedPinError, "in use as the status LED") as err:
-        pins.claim(48, "WS2812 data", "WS2812")
+        pins.claim(48, "WS2812 data", owner="WS2812")
     assert "led_pin=" in str(err.value)
 
 
 def test_moved_pins_free_the_defaults():
     h = ESP32S3DevkitHub(led_pin=21, bluetooth_button_pin=5, bluetooth=False)
-    pins.claim(38, "encoder A", "JGB37Motor")
-    pins.claim(48, "encoder B", "JGB37Motor")
+    pins.claim(38, "encoder A", owner="JGB37Motor")
+    pins.claim(48, "encoder B", owner="JGB37Motor")
     h.led.rgb(255, 255, 255)
     assert pixel(21) == (51, 51, 51)
     with raises(pins.ReservedPinError, "Bluetooth button"):
-        pins.claim(5, "trigger", "HCSR04")
+        pins.claim(5, "trigger", owner="HCSR04")
 
 
 def test_led_pin_none_leaves_the_led_alone():
     h = ESP32S3DevkitHub(led_pin=None, bluetooth=False)
     assert h.led is None
-    pins.claim(48, "WS2812 data", "WS2812")
+    pins.claim(48, "WS2812 data", owner="WS2812")
     assert [p for p, _t, _d in board.bitstreams] == []
 
 
 def test_a_busy_button_pin_fails_the_hub_and_frees_the_led_pin():
-    pins.claim(38, "echo", "HCSR04")
+    pins.claim(38, "echo", owner="HCSR04")
     with raises(pins.ReservedPinError, "in use as the echo"):
         ESP32S3DevkitHub(bluetooth=False)
-    pins.claim(48, "WS2812 data", "WS2812")  # not left claimed by the failed hub
+    pins.claim(48, "WS2812 data", owner="WS2812")  # not left claimed by the failed hub
 
 
 def test_led_and_button_on_one_pin_is_refused():
@@ -167,7 +167,7 @@ def test_close_releases_the_hub():
     h.close()
     assert hub.current() is None
     assert pixel(48) == (0, 0, 0)
-    pins.claim(38, "echo", "HCSR04")
+    pins.claim(38, "echo", owner="HCSR04")
     press(38)
     assert bluetooth.is_enabled() is True
 

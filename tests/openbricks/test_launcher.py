@@ -139,6 +139,27 @@ def test_the_stopping_press_and_its_bounce_never_restart_the_robot():
         assert _log_lines(directory, 1)[1].startswith("started: button press")
 
 
+def test_the_starting_press_chatter_never_starts_a_finished_program_again():
+    with tmpdir.scratch() as directory:
+        hub = _hub(directory, "print('done at once')\n")
+        _press(100)  # released at 250, seen at ~350: the start
+        _press(400, hold_ms=100)  # its chatter, released within START_PRESS_OPEN_MS: no second run
+        hub.idle(1500)
+        assert [i for i, _p in log.list_runs(directory + "/logs")] == [0]
+        _press(100)  # a deliberate press later starts it again
+        hub.idle(1000)
+        assert [i for i, _p in log.list_runs(directory + "/logs")] == [0, 1]
+
+
+def test_a_press_in_the_start_release_chatter_is_not_a_stop():
+    with tmpdir.scratch() as directory:
+        hub = _hub(directory, "from openbricks.tools import wait\nwait(1500)\nprint('ran to the end')\n")
+        _press(100)  # start seen at ~350
+        _press(700, hold_ms=100)  # down at ~800: past the run's start grace, inside RELEASE_CHATTER_MS
+        hub.idle(3000)
+        assert _log_lines(directory)[-1].startswith("stopped: finished")
+
+
 def test_rotation_past_ten_runs_keeps_the_last_ten_readable():
     with tmpdir.scratch() as directory:
         hub = _hub(directory, "import time\nprint('run at', time.ticks_ms())\n")
@@ -181,7 +202,7 @@ def test_running_state_is_signalled_to_listeners_and_program_claims_are_released
     with tmpdir.scratch() as directory:
         source = (
             "from openbricks import launcher, pins\n"
-            "pins.claim(5, 'HC-SR04 trig', 'HCSR04')\n"
+            "pins.claim(5, 'HC-SR04 trig', owner='HCSR04')\n"
             "print('running:', launcher.program_running())\n"
         )
         hub = _hub(directory, source)
@@ -210,7 +231,7 @@ def test_the_program_button_pin_is_guarded_and_a_missing_program_is_named():
     with tmpdir.scratch() as directory:
         hub = launcher.Launcher(BUTTON, directory + "/program.mpy", log_dir=directory + "/logs")
         with raises(pins.ReservedPinError, "in use as the program button (owner: launcher)"):
-            pins.claim(BUTTON, "L298N IN1", "L298N")
+            pins.claim(BUTTON, "L298N IN1", owner="L298N")
         with raises(OSError, "no program staged at %s/program.mpy" % directory):
             hub.run_program()
 

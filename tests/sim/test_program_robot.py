@@ -98,12 +98,8 @@ print("ambient", colour.ambient())
 """
 
 
-def test_a_colour_sensor_on_the_bare_bus_is_wired_there_without_flags():
-    result = run(BARE_COLOUR, world="zones")  # the start is on white mat
-    assert int(result.output.split("ambient ")[1].split()[0]) > 60
-
-
 def test_a_bare_colour_sensor_against_a_forced_bare_part_says_so():
+    # Without --bare-0x29 the sensor is wired where the program builds it (test_rig_options.py).
     result = run_program("mission.py", source=BARE_COLOUR, bare_0x29="vl53l0x")
     assert result.exit == ERROR  # the VL53L0X answers at 0x29, and the driver says it is not a TCS34725
     assert "not a TCS34725" in result.error

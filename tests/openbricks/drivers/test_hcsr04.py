@@ -44,7 +44,7 @@ def test_back_to_back_readings_are_spaced_so_old_echoes_die_out():
 
 
 def test_a_pin_the_runtime_owns_is_refused_naming_it():
-    pins.claim(39, "program button", "launcher")
+    pins.claim(39, "program button", owner="launcher")
     with raises(pins.ReservedPinError, "GPIO 39") as err:
         HCSR04(trig=39, echo=6)
     assert "program button" in str(err.value)

@@ -170,9 +170,9 @@ def test_an_unwired_bus_is_reported_with_the_pins():
 def test_spi_pins_are_claimed():
     imu, _chip = _imu()
     with raises(pins.ReservedPinError, "GPIO 17"):
-        pins.claim(17, "status LED", "hub")
+        pins.claim(17, "status LED", owner="hub")
     imu.close()
-    pins.claim(17, "status LED", "hub")
+    pins.claim(17, "status LED", owner="hub")
 
 
 def test_sampling_stops_once_the_program_that_built_it_has_given_its_pins_back():
@@ -185,6 +185,6 @@ def test_sampling_stops_once_the_program_that_built_it_has_given_its_pins_back()
     reads = chip.data_reads
     time.sleep_ms(2000)
     assert chip.data_reads == reads  # no SPI traffic (or scheduler load) from a dead program
-    pins.claim(17, "L298N PWM/EN", "L298N")  # the next program may wire the pins its own way
+    pins.claim(17, "L298N PWM/EN", owner="L298N")  # the next program may wire the pins its own way
     time.sleep_ms(100)
     assert chip.data_reads == reads

@@ -68,7 +68,7 @@ def test_counts_per_output_rev_sets_the_scale():
 
 def test_a_reserved_encoder_pin_fails_construction_and_frees_the_bridge_pins():
     pins.reset_claims()
-    pins.claim(39, "program button", "launcher")
+    pins.claim(39, "program button", owner="launcher")
     with raises(pins.ReservedPinError, "GPIO 39 can't be used as JGB37Motor encoder B"):
         JGB37Motor(in1=1, in2=2, pwm=17, encoder_a=7, encoder_b=39)
     assert pins.owner_of(1) is None and pins.owner_of(17) is None

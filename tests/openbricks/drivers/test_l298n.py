@@ -68,7 +68,7 @@ def test_closed_loop_commands_say_this_motor_has_no_feedback():
 
 def test_a_runtime_pin_is_refused_and_a_failed_construction_keeps_no_pins():
     pins.reset_claims()
-    pins.claim(39, "program button", "launcher", hint="pass button_pin= to Launcher()")
+    pins.claim(39, "program button", owner="launcher", hint="pass button_pin= to Launcher()")
     with raises(pins.ReservedPinError, "GPIO 39 can't be used as L298N PWM/EN"):
         L298NMotor(in1=1, in2=2, pwm=39)
     assert pins.owner_of(1) is None and pins.owner_of(2) is None

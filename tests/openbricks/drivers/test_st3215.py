@@ -370,7 +370,7 @@ def test_bus_pins_go_through_the_reserved_pin_guard():
     with raises(pins.ReservedPinError, "GPIO 19"):
         ST3215Motor(1, tx=19, rx=41)
     st3215.forget_buses()
-    pins.claim(39, "program button", "launcher")
+    pins.claim(39, "program button", owner="launcher")
     with raises(pins.ReservedPinError, "in use as the program button"):
         ST3215Motor(1, tx=14, rx=39)
 
