@@ -221,8 +221,9 @@ class Runs:
 
 
 def fts_phrase(text: str) -> str:
-    """User text as FTS5 phrases, one per word: every word must appear; no query syntax leaks through."""
-    words = text.split()
+    """User text as FTS5 phrases, one per word: every word must appear; no query syntax leaks through
+    (FTS5 reads its query as a C string: a NUL would cut a phrase open)."""
+    words = text.replace("\x00", " ").split()
     return " ".join('"' + w.replace('"', '""') + '"' for w in words) or '""'
 
 

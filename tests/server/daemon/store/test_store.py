@@ -102,7 +102,9 @@ def test_search_by_hub_text_date_outcome_and_origin(store):
     assert ids(limit=1) == ["C"] and ids(before="01A0000000000000000000000C", limit=1) == ["B"]
 
 
-@pytest.mark.parametrize("text", ['"', "AND OR NOT", "*", "a:b", "(", "NEAR(", "-x", "''", "%_\\"])
+@pytest.mark.parametrize(
+    "text", ['"', "AND OR NOT", "*", "a:b", "(", "NEAR(", "-x", "''", "%_\\", "\u00b9/\x00"]
+)
 def test_search_text_is_never_query_syntax(store, text):
     _run(store, "01A0000000000000000000000A", lines=["plain"])
     assert store.runs.search(RunQuery(text=text)) == []
