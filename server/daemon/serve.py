@@ -71,15 +71,23 @@ def run(config: DaemonConfig, print_line: Callable[[str], None] = print) -> bool
     sock = bind(config)
     config = replace(config, port=sock.getsockname()[1])
     app = create_app(config, services=[*SERVICES, announce(print_line)])
-    server = uvicorn.Server(
-        uvicorn.Config(
-            app,
-            log_level="warning",
-            lifespan="on",
-            ws_max_size=WS_MAX_MESSAGE_BYTES,
-            timeout_graceful_shutdown=5,
-            access_log=False,
-        )
-    )
+    server = uvicorn.Server(uvicorn_config(app))
     server.run(sockets=[sock])
     return server.started
+
+
+def uvicorn_config(app):
+    """One worker, asyncio, quiet. No per-message compression on the event stream: deflating every
+    message once per client costs more CPU than the fan-out itself, and the console runs on a laptop
+    serving its own network."""
+    import uvicorn
+
+    return uvicorn.Config(
+        app,
+        log_level="warning",
+        lifespan="on",
+        ws_max_size=WS_MAX_MESSAGE_BYTES,
+        ws_per_message_deflate=False,
+        timeout_graceful_shutdown=5,
+        access_log=False,
+    )

@@ -23,7 +23,7 @@ from openbricks_server.daemon.events import control
 
 router = APIRouter(tags=["events"])
 
-SEND_TIMEOUT_S = 30.0  # a client that takes longer than this to accept one message is disconnected
+SEND_TIMEOUT_S = 30.0  # a client that takes longer than this to accept a batch of messages is disconnected
 MAX_COMMAND_BYTES = 64 * 1024
 
 Handler = Callable[[WebSocket, Caller, dict], Awaitable[dict | None]]
@@ -66,17 +66,19 @@ async def events(
     subscriber, first = bus.subscribe(since, boot)
     lock = asyncio.Lock()
 
-    async def send(text: str) -> None:
-        async with lock:
-            async with asyncio.timeout(SEND_TIMEOUT_S):
+    async def send(texts: list[str]) -> None:
+        async with lock, asyncio.timeout(SEND_TIMEOUT_S):
+            for text in texts:
                 await websocket.send_text(text)
 
+    async def reply(text: str) -> None:
+        await send([text])
+
     try:
-        for text in first:
-            await send(text)
+        await send(first)
         pump = asyncio.create_task(subscriber.pump(send), name="events-pump")
         try:
-            await _serve_commands(websocket, caller, send)
+            await _serve_commands(websocket, caller, reply)
         finally:
             pump.cancel()
             with contextlib.suppress(asyncio.CancelledError, Exception):

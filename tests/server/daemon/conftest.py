@@ -20,7 +20,7 @@ from websockets.sync.client import connect
 
 from openbricks_server.daemon.app import SERVICES, DaemonContext, create_app
 from openbricks_server.daemon.config import DaemonConfig
-from openbricks_server.daemon.serve import WS_MAX_MESSAGE_BYTES, bind
+from openbricks_server.daemon.serve import bind, uvicorn_config
 
 START_TIMEOUT_S = 20
 
@@ -41,15 +41,7 @@ class Daemon:
         chosen = list(SERVICES if services is None else services)
         self.app = create_app(self.config, services=[*chosen, capture_loop])
         self.ctx: DaemonContext = self.app.state.ctx
-        self.server = uvicorn.Server(
-            uvicorn.Config(
-                self.app,
-                log_level="warning",
-                lifespan="on",
-                ws_max_size=WS_MAX_MESSAGE_BYTES,
-                access_log=False,
-            )
-        )
+        self.server = uvicorn.Server(uvicorn_config(self.app))
         self.thread = threading.Thread(target=self.server.run, kwargs={"sockets": [sock]}, daemon=True)
         self.thread.start()
         deadline = time.monotonic() + START_TIMEOUT_S
