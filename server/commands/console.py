@@ -6,7 +6,7 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from openbricks_server.errors import EXIT_OK, CliError
+from openbricks_server.errors import EXIT_OK, CliError, UsageError
 
 
 def _config(args):
@@ -29,9 +29,9 @@ def _serve(args) -> int:
     from openbricks_server.daemon.store import StoreError
 
     if args.port < 0 or args.port > 65535:
-        raise CliError(f"--port {args.port} is not a port number (0-65535)")
+        raise UsageError(f"--port {args.port} is not a port number (0-65535)")
     if args.virtual < 0:
-        raise CliError(f"--virtual {args.virtual}: give 0 or more virtual hubs")
+        raise UsageError(f"--virtual {args.virtual}: give 0 or more virtual hubs")
     try:
         started = run(_config(args), print_line=lambda line: print(line, flush=True))
     except (BindError, StartupRefused, StoreError) as exc:

@@ -130,6 +130,20 @@ async def _http_error(request: Request, exc: StarletteHTTPException) -> JSONResp
             message=f"no such endpoint: {request.url.path}",
             hint="the API is listed at /docs",
         )
+    elif exc.status_code == 405:
+        allowed = (getattr(exc, "headers", None) or {}).get("Allow", "")
+        body = ErrorBody(
+            error=code,
+            message=f"{request.method} is not allowed on {request.url.path}",
+            hint=f"it takes {allowed}" if allowed else "the API is listed at /docs",
+        )
+    elif exc.status_code == 400 and request.method in ("POST", "PUT", "PATCH"):
+        # FastAPI's words for a body it could not decode (bytes that are not UTF-8, say).
+        body = ErrorBody(
+            error=code,
+            message="the request body could not be read: send UTF-8 JSON",
+            hint="see the request's schema at /docs",
+        )
     else:
         body = ErrorBody(error=code, message=str(exc.detail))
     return error_response(exc.status_code, body, getattr(exc, "headers", None))

@@ -295,6 +295,23 @@ CASES = [
     case("docs-unknown-page", "docs nosuch", USAGE, "no docs page 'nosuch'", "pages: "),
     case("docs-typo", "docs simulater", USAGE, "did you mean simulator?"),
     case("docs-path-traversal", "docs ../../etc/passwd", USAGE, "no docs page '../../etc/passwd'"),
+    # -- console -------------------------------------------------------------------------------
+    case(
+        "console-port-out-of-range",
+        "console --port 99999",
+        USAGE,
+        "--port 99999 is not a port number (0-65535)",
+    ),
+    case("console-port-word", "console --port high", USAGE, "invalid int value: 'high'"),
+    case("console-negative-virtual", "console --virtual -2", USAGE, "--virtual -2: give 0 or more"),
+    case("console-unknown-action", "console bogus", USAGE, "invalid choice: 'bogus'"),
+    case("console-token-unknown-role", "console token --role king", USAGE, "invalid choice: 'king'"),
+    case(
+        "console-foreign-address",
+        "console --host 192.0.2.1 --port 1 --virtual 0 --no-ble",
+        FAILED,
+        "cannot listen on 192.0.2.1:1",
+    ),
     # -- sim -------------------------------------------------------------------------------------
     case("sim-unknown-command", "sim bogus", USAGE, "invalid choice: 'bogus'"),
     case("sim-run-without-program", "sim run", USAGE, "required: SCRIPT"),
@@ -413,3 +430,277 @@ def test_the_catalogue_covers_every_command():
     covered = {c.values[0].argv[0] for c in CASES}
     assert set(COMMANDS) - {"doc"} <= covered
     assert len(CASES) >= 40
+
+
+# -- the console daemon: REST and WebSocket ---------------------------------------------------------
+# A real daemon under uvicorn on 127.0.0.1 (tests/server/daemon/conftest.py); every refusal is a
+# specific status with the one error shape, {"error", "message", "hint"}.
+
+
+@dataclass(frozen=True)
+class ApiCase:
+    method: str
+    path: str
+    status: int
+    error: str
+    words: tuple[str, ...]
+    request: dict  # httpx keywords: json=, content=, headers=
+    role: str = "operator"
+
+
+def api(id_, method, path, status, error, *words, role="operator", **request):
+    return pytest.param(ApiCase(method, path, status, error, words, request, role), id=id_)
+
+
+JSON = {"content-type": "application/json"}
+
+API_CASES = [
+    api("unknown-endpoint", "GET", "/api/nope", 404, "not_found", "no such endpoint: /api/nope"),
+    api("unknown-program", "GET", "/api/programs/nope.py", 404, "not_found", "program 'nope.py' not found"),
+    api("delete-unknown-program", "DELETE", "/api/programs/nope.py", 404, "not_found", "'nope.py'"),
+    api(
+        "program-path-traversal",
+        "PUT",
+        "/api/programs/..%2F..%2Fetc%2Fpasswd",
+        404,
+        "not_found",
+        "no such endpoint",
+        json={"source": "x = 1"},
+    ),
+    api(
+        "program-named-dotdot",
+        "PUT",
+        "/api/programs/%2E%2E",
+        422,
+        "bad_program_name",
+        "'..' is not a program name",
+        json={"source": "x = 1"},
+    ),
+    api(
+        "program-hidden-name",
+        "PUT",
+        "/api/programs/.hidden",
+        422,
+        "bad_program_name",
+        "no '..'",
+        json={"source": "x = 1"},
+    ),
+    api(
+        "malformed-json",
+        "PUT",
+        "/api/programs/x.py",
+        422,
+        "invalid_request",
+        "not valid JSON",
+        content=b"{not json",
+        headers=JSON,
+    ),
+    api(
+        "non-utf8-body",
+        "PUT",
+        "/api/programs/x.py",
+        400,
+        "bad_request",
+        "send UTF-8 JSON",
+        content=b'{"source": "\xff\xfe"}',
+        headers=JSON,
+    ),
+    api(
+        "missing-source",
+        "PUT",
+        "/api/programs/x.py",
+        422,
+        "invalid_request",
+        "source: Field required",
+        json={},
+    ),
+    api(
+        "source-not-text", "PUT", "/api/programs/x.py", 422, "invalid_request", "source:", json={"source": 5}
+    ),
+    api(
+        "binary-program",
+        "PUT",
+        "/api/programs/x.py",
+        422,
+        "binary_program",
+        "control character 0x00",
+        json={"source": "print(1)\x00"},
+    ),
+    api(
+        "oversized-program",
+        "PUT",
+        "/api/programs/x.py",
+        413,
+        "program_too_large",
+        f"x.py is {OVERSIZED_BYTES} bytes",
+        json={"source": "#" * OVERSIZED_BYTES},
+    ),
+    api(
+        "program-syntax-error",
+        "PUT",
+        "/api/programs/x.py",
+        422,
+        "syntax_error",
+        "x.py, line 1: '(' was never closed",
+        json={"source": "print(1"},
+    ),
+    api(
+        "wrong-method",
+        "POST",
+        "/api/programs/x.py",
+        405,
+        "method_not_allowed",
+        "POST is not allowed",
+        json={},
+    ),
+    api(
+        "version-zero",
+        "GET",
+        "/api/programs/x.py/versions/0",
+        422,
+        "invalid_request",
+        "greater than or equal to 1",
+    ),
+    api("bad-run-id", "GET", "/api/runs/notanid", 422, "bad_run_id", "'notanid' is not a run id"),
+    api(
+        "unknown-run",
+        "GET",
+        "/api/runs/01HZZZZZZZZZZZZZZZZZZZZZZZ",
+        404,
+        "not_found",
+        "run 01HZZZZZZZZZZZZZZZZZZZZZZZ",
+    ),
+    api("bad-date", "GET", "/api/runs?since=garbage", 422, "invalid_request", "since (in the query)"),
+    api(
+        "bad-export-format",
+        "GET",
+        "/api/runs/01HZZZZZZZZZZZZZZZZZZZZZZZ/export?format=xml",
+        422,
+        "invalid_request",
+        "'json' or 'text'",
+    ),
+    api("no-token", "GET", "/api/programs", 401, "unauthorized", "no valid token", role="none"),
+    api("wrong-token", "GET", "/api/programs", 401, "unauthorized", "no valid token", role="wrong"),
+    api(
+        "viewer-writes",
+        "PUT",
+        "/api/programs/x.py",
+        403,
+        "operator_required",
+        "is a viewer's (read-only)",
+        role="viewer",
+        json={"source": "x = 1"},
+    ),
+    api(
+        "foreign-host",
+        "GET",
+        "/api/programs",
+        403,
+        "host_not_allowed",
+        "host name 'evil.example'",
+        headers={"Host": "evil.example"},
+    ),
+]
+
+
+@pytest.fixture(scope="module")
+def console(tmp_path_factory):
+    from ..daemon.conftest import start_daemon
+
+    running = start_daemon(tmp_path_factory.mktemp("console") / "data")
+    running.viewer_token = running.ctx.store.tokens.mint("viewer", "mentor")
+    yield running
+    running.stop()
+
+
+@pytest.mark.parametrize("bad", API_CASES)
+def test_bad_requests_get_a_specific_status_and_the_error_shape(bad: ApiCase, console):
+    import httpx
+
+    tokens = {
+        "operator": console.token,
+        "viewer": console.viewer_token,
+        "wrong": "not-a-token",
+    }
+    headers = dict(bad.request.get("headers", {}))
+    if bad.role in tokens:
+        headers["Authorization"] = f"Bearer {tokens[bad.role]}"
+    request = {k: v for k, v in bad.request.items() if k != "headers"}
+    with httpx.Client(base_url=console.url, timeout=10) as client:
+        answer = client.request(bad.method, bad.path, headers=headers, **request)
+    assert answer.status_code == bad.status, answer.text
+    body = answer.json()
+    assert body["error"] == bad.error, body
+    assert body["message"] and body.get("hint"), f"no message or hint: {body}"
+    for words in bad.words:
+        assert words in body["message"] + body["hint"], body
+    assert not _TRACEBACK.search(answer.text) and not _EXCEPTION_NAME.search(answer.text), answer.text
+
+
+WS_CASES = [
+    pytest.param("not json", "bad_message", "not JSON", id="ws-not-json"),
+    pytest.param("[1, 2]", "bad_message", 'a JSON object with a "cmd" string', id="ws-json-array"),
+    pytest.param('{"cmd": 5}', "bad_message", '"cmd" string', id="ws-cmd-not-text"),
+    pytest.param(
+        '{"cmd": "launch", "id": 1}', "unknown_command", "no command 'launch'", id="ws-unknown-command"
+    ),
+    pytest.param(b"\x00\x01\xff binary", "bad_message", "JSON text frames", id="ws-binary-frame"),
+    pytest.param("x" * (64 * 1024 + 1), "bad_message", "at most 65536 bytes", id="ws-oversized-command"),
+]
+
+
+@pytest.mark.parametrize(("message", "error", "words"), WS_CASES)
+def test_garbage_on_the_event_stream_gets_a_reply_and_the_stream_goes_on(console, message, error, words):
+    import json
+
+    with console.websocket() as ws:
+        assert json.loads(ws.recv(timeout=10))["type"] == "hello"
+        ws.send(message)
+        reply = json.loads(ws.recv(timeout=10))
+        while reply["type"] != "reply":  # events of the stream may come first
+            reply = json.loads(ws.recv(timeout=10))
+        ws.send(json.dumps({"cmd": "ping", "id": "after"}))
+        pong = json.loads(ws.recv(timeout=10))
+    assert reply["data"]["ok"] is False and reply["data"]["error"]["error"] == error, reply
+    assert words in reply["data"]["error"]["message"] and reply["data"]["error"]["hint"], reply
+    assert pong["data"]["ok"] is True, pong
+
+
+@pytest.mark.parametrize(
+    ("token", "origin"),
+    [
+        pytest.param("not-a-token", None, id="ws-wrong-token"),
+        pytest.param(None, "http://evil.example", id="ws-foreign-origin"),
+    ],
+)
+def test_the_event_stream_refuses_strangers(console, token, origin):
+    from websockets.exceptions import InvalidStatus
+
+    with pytest.raises(InvalidStatus) as refused:
+        with console.websocket(token=token, origin=origin):
+            pass
+    assert refused.value.response.status_code in (401, 403)
+
+
+def test_ctrl_c_stops_a_sim_run_with_status_130(files):
+    """Ctrl-C is input too: the run stops, says so, and the shell sees 130 like any interrupted command."""
+    import signal
+    import subprocess
+    import sys
+
+    program = files / "ticking.py"
+    program.write_text("import time\nwhile True:\n    print('tick')\n    time.sleep_ms(100)\n")
+    process = subprocess.Popen(
+        [sys.executable, "-m", "openbricks_server.cli", "sim", "run", str(program), "--speed", "1"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    try:
+        assert process.stdout.readline() == "tick\n"
+        process.send_signal(signal.SIGINT)
+        _out, err = process.communicate(timeout=30)
+    finally:
+        process.kill()
+    assert process.returncode == 130, err
+    assert "[stopped]" in err and not _TRACEBACK.search(err), err
