@@ -59,6 +59,7 @@ _EPOCH_2000_MS = 946684800000
 
 _staging = {}  # the chunked upload in progress: path, part, file, received
 _tag = ["-"]  # the host's nonce for the frames of the call now running
+_answered_after = [None]  # launcher.last_end() when a host call last replied (run's own reply aside)
 
 
 def tag(nonce):
@@ -82,7 +83,24 @@ def _frame(kind, payload=""):
             interrupted = exc
 
 
+def _last_run_report():
+    """How the latest run ended, and whether it ended after the last reply of a host call: a run
+    stopped by a console Ctrl-C since then was stopped by the Ctrl-C that opened this session (a
+    CLI killed mid-run leaves its program running; `openbricks stop` says it stopped it)."""
+    end = launcher.last_end()
+    if end is None:
+        return None
+    return {
+        "index": end[0],
+        "outcome": end[1],
+        "trigger": end[2],
+        "stopped_by": end[3],
+        "since_last_call": end is not _answered_after[0],
+    }
+
+
 def _reply(result):
+    _answered_after[0] = launcher.last_end()
     interrupted = _frame("result", json.dumps(result))
     if interrupted is not None:
         raise interrupted
@@ -130,6 +148,7 @@ def _info():
         "log_slots": log.MAX_RUNS,
         "log_max_bytes": log.MAX_BYTES,
         "running": launcher.program_running(),
+        "last_run": _last_run_report(),
         "free_bytes": gc.mem_free() if hasattr(gc, "mem_free") else None,
         "epoch_ms": log.epoch_ms(),
     }

@@ -59,9 +59,19 @@ _listeners = []
 _launcher = [None]
 
 
+_last_end = [None]  # (run log index, outcome, trigger, stopped by) of the latest run
+
+
 def program_running():
     """True while a user program is executing, whatever started it. One read, no allocation."""
     return _running[0]
+
+
+def last_end():
+    """How the latest run ended, or None: (run log index, outcome ("finished", "stopped", "error"),
+    trigger ("host run", "button press"), stopped by ("console", "button" or None)). A new tuple
+    per run, so a caller can tell whether it has seen this one."""
+    return _last_end[0]
 
 
 def add_listener(callback):
@@ -456,7 +466,9 @@ class Launcher:
         halts = estop.mark()
         estop.clear(halts)
         interrupted = None
-        with log.session(self.log_dir):
+        outcome = "error"
+        stopped_by = None
+        with log.session(self.log_dir) as run_log:
             self._started_ms = time.ticks_ms()
             log.write_text(
                 "started: %s | firmware %s | program %s | uptime %d ms | free %s B"
@@ -473,6 +485,7 @@ class Launcher:
                 log.write_text("stopped: finished after %d ms" % self._elapsed_ms())
             except KeyboardInterrupt as exc:
                 outcome = "stopped"
+                stopped_by = "console" if self._stop_pressed_ms is None else "button"
                 interrupted = exc
                 _set_running(False)
                 self._wind_down()
@@ -486,6 +499,7 @@ class Launcher:
                 log.write_text(text)
                 log.write_text("stopped: %s after %d ms" % (_exception_line(exc), self._elapsed_ms()))
             finally:
+                _last_end[0] = (run_log.index, outcome, trigger, stopped_by)
                 _set_running(False)
                 self._wind_down()  # if an interrupt landed before a branch above got to it
                 estop.clear(halts)
@@ -585,6 +599,7 @@ def reset_state():
     """Forget the hub's launcher, the running flag and the listeners (a soft reset; tests)."""
     shutdown()
     _running[0] = False
+    _last_end[0] = None
     del _listeners[:]
     del _events[:]
 

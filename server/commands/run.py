@@ -1,8 +1,10 @@
 """`openbricks run`: compile, stage as the button program, run it and stream its output.
 
 Ctrl-C sends the hub a stop (Ctrl-C over the REPL); the output keeps streaming until the hub reports
-the run as stopped, which is the confirmation. A second Ctrl-C leaves without waiting for it. The
-exit status is the program's outcome: 0 finished, 1 error, 130 stopped.
+the run as stopped, which is the confirmation. A second Ctrl-C leaves without waiting for it. SIGTERM
+(what `timeout` and process managers send) and SIGHUP (the terminal closed) do the same as Ctrl-C,
+so the program never keeps running on the hub behind a CLI that was told to end. The exit status
+is the program's outcome: 0 finished, 1 error, 130 stopped.
 """
 
 from __future__ import annotations
@@ -21,12 +23,27 @@ RUN_TIMEOUT_S = 24 * 3600.0  # a mission may run long; the link's own drop detec
 OUTCOME_STATUS = {"finished": EXIT_OK, "error": EXIT_FAILED, "stopped": EXIT_INTERRUPTED}
 
 
+STOP_SIGNALS = {signal.SIGINT: "^C", signal.SIGTERM: "SIGTERM", signal.SIGHUP: "SIGHUP"}
+
+
+def say(text: str) -> None:
+    """A line on stderr; a terminal that hung up (SIGHUP) takes nothing more, and that is fine."""
+    try:
+        print(text, file=sys.stderr, flush=True)
+    except OSError:
+        pass
+
+
 class TerminalOutput:
-    """The hub's output on our stdout as it arrives, with its CRLF line ends made plain newlines."""
+    """The hub's output on our stdout as it arrives, with its CRLF line ends made plain newlines.
+
+    A stdout that went away (a closed terminal, a reader that quit) stops the showing, not the run:
+    the run still ends as the hub reports it."""
 
     def __init__(self, stream=None):
         self.stream = stream or sys.stdout.buffer
         self._held_cr = False
+        self._gone = False
 
     def __call__(self, data: bytes) -> None:
         if self._held_cr:
@@ -34,12 +51,18 @@ class TerminalOutput:
             self._held_cr = False
         if data.endswith(b"\r"):
             data, self._held_cr = data[:-1], True
-        self.stream.write(data.replace(b"\r\n", b"\n"))
-        self.stream.flush()
+        if self._gone:
+            return
+        try:
+            self.stream.write(data.replace(b"\r\n", b"\n"))
+            self.stream.flush()
+        except OSError:
+            self._gone = True
 
 
-class StopOnCtrlC:
-    """First Ctrl-C: ask the hub to stop and keep streaming; second: leave without the confirmation."""
+class StopOnSignal:
+    """First Ctrl-C (or SIGTERM, SIGHUP): ask the hub to stop and keep streaming until it confirms;
+    a second one: leave without the confirmation."""
 
     def __init__(self, session, task: asyncio.Task):
         self.session = session
@@ -47,10 +70,10 @@ class StopOnCtrlC:
         self.requested = False
         self.abandoned = False
 
-    def __call__(self) -> None:
+    def __call__(self, name: str = "^C") -> None:
         if not self.requested:
             self.requested = True
-            print(f"\n^C: stopping the program on {self.session.name} ...", file=sys.stderr, flush=True)
+            say(f"\n{name}: stopping the program on {self.session.name} ...")
             asyncio.ensure_future(self.session.repl.interrupt())
             return
         self.abandoned = True
@@ -70,8 +93,9 @@ async def _talk(session, program):
     print(f"{session.name}: firmware {session.info.firmware}", file=sys.stderr, flush=True)
     path = await stage(session, program)
     loop = asyncio.get_running_loop()
-    stopper = StopOnCtrlC(session, asyncio.current_task())
-    loop.add_signal_handler(signal.SIGINT, stopper)
+    stopper = StopOnSignal(session, asyncio.current_task())
+    for number, name in STOP_SIGNALS.items():
+        loop.add_signal_handler(number, stopper, name)
     try:
         result = await session.repl.run(
             path, on_output=TerminalOutput(), on_link_event=_link_event, timeout_s=RUN_TIMEOUT_S
@@ -91,14 +115,14 @@ async def _talk(session, program):
             ) from None
         raise
     finally:
-        loop.remove_signal_handler(signal.SIGINT)
+        for number in STOP_SIGNALS:
+            loop.remove_signal_handler(number)
     outcome = result.get("outcome", "error")
+    which = "before it started" if result.get("run") is None else f"(run {result['run']})"
     if outcome == "stopped":
-        print(
-            f"stopped: {session.name} confirmed the program ended (run {result.get('run')})", file=sys.stderr
-        )
+        say(f"stopped: {session.name} confirmed the program ended {which}")
     elif outcome == "error":
-        print(f"the program ended with an error (run {result.get('run')})", file=sys.stderr)
+        say(f"the program ended with an error {which}")
     return outcome
 
 

@@ -243,6 +243,8 @@ class HubInfo:
     max_program_bytes: int
     compression: tuple[str, ...]
     running: bool
+    #: How the hub's latest run ended (launcher.last_run()), or None.
+    last_run: dict | None
     raw: dict
 
     @classmethod
@@ -258,5 +260,6 @@ class HubInfo:
             max_program_bytes=int(result.get("max_program_bytes", 0)),
             compression=tuple(result.get("compression", ())),
             running=bool(result.get("running", False)),
+            last_run=result.get("last_run"),
             raw=dict(result),
         )

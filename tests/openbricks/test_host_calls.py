@@ -205,6 +205,29 @@ def test_a_result_frame_cut_by_a_ctrl_c_is_written_again_marked_then_the_stop_pr
         assert json.loads(console.lines[1][len(again) :]) == {"ok": True, "outcome": "finished", "run": 0}
 
 
+def test_info_tells_a_run_a_console_ctrl_c_stopped_since_the_last_reply_from_an_older_one():
+    with tmpdir.scratch() as directory:
+        path = directory + "/program.py"
+        host_calls.stage(_b64(b"raise KeyboardInterrupt\n"), path)
+        launcher.get(program_path=path, log_dir=directory + "/logs")
+        console = _Console()
+        try:
+            with raises(KeyboardInterrupt):
+                host_calls.run()  # a CLI killed mid-run: nobody read this reply
+            first = host_calls.info()["last_run"]
+            second = host_calls.info()["last_run"]
+        finally:
+            console.close()
+        assert first == {
+            "index": 0,
+            "outcome": "stopped",
+            "trigger": "host run",
+            "stopped_by": "console",
+            "since_last_call": True,
+        }
+        assert second["since_last_call"] is False
+
+
 def test_run_without_a_staged_program_says_how_to_stage_one():
     with tmpdir.scratch() as directory:
         launcher.get(program_path=directory + "/program.mpy", log_dir=directory + "/logs")

@@ -142,8 +142,11 @@ def cli(env: dict, *args: str, timeout: float = CLI_TIMEOUT_S, cwd=None) -> subp
     )
 
 
-def interrupt_when(process: subprocess.Popen, seen: str, timeout_s: float = 60) -> str:
-    """Read the CLI's stdout until `seen` appears, then Ctrl-C it; returns what was read."""
+def interrupt_when(
+    process: subprocess.Popen, seen: str, timeout_s: float = 60, signal_number: int = signal.SIGINT
+) -> str:
+    """Read the CLI's stdout until `seen` appears, then Ctrl-C it (or send `signal_number`); returns
+    what was read."""
     got = ""
     deadline = time.monotonic() + timeout_s
     while seen not in got:
@@ -154,7 +157,7 @@ def interrupt_when(process: subprocess.Popen, seen: str, timeout_s: float = 60) 
         if not line and process.poll() is not None:
             raise AssertionError(f"the CLI ended before {seen!r}: {got!r} {process.stderr.read()}")
         got += line
-    process.send_signal(signal.SIGINT)
+    process.send_signal(signal_number)
     return got
 
 

@@ -1,5 +1,6 @@
 """`openbricks run` end to end against a virtual hub: output, outcome, Ctrl-C, errors for users."""
 
+import signal
 import subprocess
 import sys
 import time
@@ -67,6 +68,28 @@ def test_ctrl_c_stops_the_remote_program_and_the_hub_confirms(env, hub, tmp_path
     assert process.returncode == 130, err
     assert "stopping the program on RobotA" in err and "stopped: RobotA confirmed the program ended" in err
     assert "Traceback" not in err
+    assert not hub.control("status")["running"]
+
+
+@pytest.mark.parametrize("stop_signal", [signal.SIGTERM, signal.SIGHUP])
+def test_sigterm_and_sighup_stop_the_remote_program_like_ctrl_c(env, hub, tmp_path, stop_signal):
+    program = tmp_path / "forever.py"
+    program.write_text(FOREVER)
+    process = subprocess.Popen(
+        [sys.executable, "-m", "openbricks_server.cli", "run", "-n", "RobotA", str(program)],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env=env,
+    )
+    try:
+        interrupt_when(process, "loop 3", signal_number=stop_signal)
+        out, err = process.communicate(timeout=30)
+    finally:
+        process.kill()
+    assert process.returncode == 130, err
+    assert f"{stop_signal.name}: stopping the program on RobotA" in err
+    assert "stopped: RobotA confirmed the program ended (run " in err
     assert not hub.control("status")["running"]
 
 

@@ -1,6 +1,8 @@
 """upload then the button, stop, and the run logs, end to end against a virtual hub."""
 
 import re
+import subprocess
+import sys
 
 import pytest
 
@@ -42,10 +44,39 @@ def test_stop_ends_a_button_started_program(env, hub, tmp_path):
     assert cli(env, "upload", "-n", "RobotA", str(program)).returncode == 0
     hub.press_button(until="started")
     done = cli(env, "stop", "-n", "RobotA")
-    assert done.returncode == 0 and done.stdout.strip() == "RobotA: no program running"
+    assert done.returncode == 0
+    assert re.fullmatch(r"RobotA: stopped the program \(run \d+, started by button press\)\n", done.stdout)
     assert not hub.control("status")["running"]
     log = cli(env, "log", "-n", "RobotA")
     assert "still going 0" in log.stdout and "stopped: KeyboardInterrupt" in log.stdout
+    again = cli(env, "stop", "-n", "RobotA")
+    assert again.returncode == 0 and again.stdout == "RobotA: no program was running\n"
+
+
+def test_stop_after_a_killed_run_says_it_stopped_the_program_left_running(env, hub, tmp_path):
+    program = tmp_path / "forever.py"
+    program.write_text(FOREVER)
+    process = subprocess.Popen(
+        [sys.executable, "-m", "openbricks_server.cli", "run", "-n", "RobotA", str(program)],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env=env,
+    )
+    try:
+        while "still going 2" not in process.stdout.readline():
+            assert process.poll() is None, process.stderr.read()
+        process.kill()  # kill -9: no chance to stop the program on the hub
+        process.wait(timeout=10)
+    finally:
+        process.kill()
+        process.stdout.close()
+        process.stderr.close()
+    assert hub.control("status")["running"]
+    done = cli(env, "stop", "-n", "RobotA")
+    assert done.returncode == 0, done.stderr
+    assert re.fullmatch(r"RobotA: stopped the program \(run \d+, started by host run\)\n", done.stdout)
+    assert not hub.control("status")["running"]
 
 
 def test_log_list_and_a_chosen_run_with_local_time_stamps(env):
