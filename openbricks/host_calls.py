@@ -421,8 +421,9 @@ class _Watch:
         return False
 
 
-def run(path=None, watch=None):
-    """Run the staged program through the launcher between a program frame and the result frame.
+def run(path=None, watch=None, name=None):
+    """Run the staged program through the launcher between a program frame and the result frame
+    (`name`: the program's own file name, for its tracebacks).
 
     Whatever ends the run, the result frame follows: a stop (program button or Ctrl-C, even one
     that lands while the run is being wrapped up) prints it and then propagates KeyboardInterrupt,
@@ -442,7 +443,7 @@ def run(path=None, watch=None):
         interrupted = _frame("program")
         if interrupted is None:
             with watcher:
-                result = {"ok": True, "outcome": hub.run_program("host run", path)}
+                result = {"ok": True, "outcome": hub.run_program("host run", path, name=name)}
     except KeyboardInterrupt as exc:
         interrupted = exc
     except Exception as exc:  # noqa: BLE001 - e.g. nothing staged: the host gets the reason

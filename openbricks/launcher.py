@@ -175,10 +175,31 @@ def _release_program_hardware(halts):
 
 
 def traceback_text(exc):
-    """The full traceback of `exc` as text, on MicroPython and on CPython (the simulator)."""
+    """The traceback of what a program raised, with the program's own frames only.
+
+    The runtime's frames (this launcher running the program, a driver the program called) say
+    nothing the person can act on, and the error message names what went wrong; the program's
+    frames show where. Works on MicroPython and on CPython (the simulator provides MicroPython's
+    sys.print_exception there).
+    """
     buf = io.StringIO()
-    sys.print_exception(exc, buf)  # on CPython the simulator provides MicroPython's sys.print_exception
-    return buf.getvalue()
+    sys.print_exception(exc, buf)
+    return user_frames(buf.getvalue())
+
+
+def user_frames(text):
+    """MicroPython traceback `text` without the lines of frames in the runtime's own files."""
+    kept = []
+    dropped = False  # the last frame was dropped: so is the source line CPython shows under it
+    for line in text.split("\n"):
+        if line.startswith('  File "'):
+            name = line[8 : line.find('"', 8)]
+            dropped = name.startswith("openbricks/") or "/openbricks/" in name
+        elif not (dropped and line.startswith("    ")):
+            dropped = False
+        if not dropped:
+            kept.append(line)
+    return "\n".join(kept)
 
 
 def _exception_line(exc):
@@ -228,7 +249,7 @@ def _forget_program_modules(before, directory):
             del sys.modules[name]
 
 
-def _execute(path):
+def _execute(path, name=None):
     """Run the program file in this thread with print teed into the run log.
 
     The program's directory leads sys.path for the run, so its helper modules import as they would
@@ -249,7 +270,7 @@ def _execute(path):
     try:
         if path.endswith(".py"):
             with open(path) as f:
-                code = compile(f.read(), path, "exec")
+                code = compile(f.read(), name or path, "exec")
             exec(code, {"__name__": "__main__", "__file__": path, "print": log.tee_print})
         else:
             # Bytecode (.mpy) can only be loaded through import, so it runs with __name__ "program".
@@ -450,8 +471,11 @@ class Launcher:
 
     # -- running a program (main thread) ------------------------------------------------------
 
-    def run_program(self, trigger="host run", path=None, reraise_interrupt=True):
+    def run_program(self, trigger="host run", path=None, reraise_interrupt=True, name=None):
         """Run the staged program here and now, logged and framed; returns the outcome.
+
+        `name` is the program's own file name (a source file staged as /program.py), which its
+        tracebacks show; bytecode carries the name it was compiled with.
 
         The outcome is "finished", "stopped" (KeyboardInterrupt: button or Ctrl-C) or "error".
         With `reraise_interrupt` a stop propagates as KeyboardInterrupt once the run is logged, so a
@@ -478,7 +502,7 @@ class Launcher:
             self._halts_mark = halts
             _set_running(True)
             try:
-                _execute(path)
+                _execute(path, name)
                 outcome = "finished"
                 _set_running(False)
                 self._wind_down()

@@ -27,7 +27,6 @@ import signal
 import sys
 import threading
 import time
-import traceback
 from dataclasses import asdict, dataclass, field
 
 from . import limits
@@ -146,12 +145,12 @@ class ProgramRun:
                     exit_reason = CPU_LIMIT
                 except MemoryError as exc:
                     exit_reason = MEMORY_LIMIT
-                    error = "".join(traceback.format_exception(type(exc), exc, exc.__traceback__))
+                    error = flash.python.traceback.format(exc, program=True)
                 except SystemExit:
                     exit_reason = RESET if sim.board.reset_requested else FINISHED
                 except BaseException as exc:  # noqa: BLE001 - whatever the program raised is its result
                     exit_reason = ERROR
-                    error = "".join(traceback.format_exception(type(exc), exc, exc.__traceback__))
+                    error = flash.python.traceback.format(exc, program=True)
                 finally:
                     if watchdog is not None:
                         watchdog.cancel()

@@ -98,7 +98,11 @@ async def _talk(session, program):
         loop.add_signal_handler(number, stopper, name)
     try:
         result = await session.repl.run(
-            path, on_output=TerminalOutput(), on_link_event=_link_event, timeout_s=RUN_TIMEOUT_S
+            path,
+            name=program.filename,
+            on_output=TerminalOutput(),
+            on_link_event=_link_event,
+            timeout_s=RUN_TIMEOUT_S,
         )
     except HubException as exc:
         # A stop that lands mid-print can end the run before its result line is out: the hub's

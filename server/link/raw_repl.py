@@ -366,6 +366,7 @@ class RawRepl:
         self,
         path: str | None = None,
         *,
+        name: str | None = None,
         on_output: Callable[[bytes], None] | None = None,
         on_link_event: Callable[[LinkEvent], None] | None = None,
         timeout_s: float = DEFAULT_RUN_TIMEOUT_S,
@@ -382,6 +383,8 @@ class RawRepl:
         data = {} if path is None else {"path": path}
         if watch is not None:
             data["watch"] = watch
+        if name is not None:
+            data["name"] = name  # tracebacks name the program's own file, not the staged one
         await self._await_prompt(self.timeout_s)
         try:
             (result,) = await self.exec_many(

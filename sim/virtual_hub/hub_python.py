@@ -97,13 +97,17 @@ class TracebackFormatter:
             pass
         return None
 
-    def format(self, exc):
+    def format(self, exc, program=False):
+        """The traceback text; a `program`'s shows its own frames only, without the runtime's
+        (as the hub's launcher shows it)."""
         lines = []
         tb = exc.__traceback__
         frames = []
         while tb is not None:
             code = tb.tb_frame.f_code
             shown = self._shown_name(code.co_filename)
+            if program and shown is not None and shown.startswith(RUNTIME_PACKAGE + "/"):
+                shown = None
             if shown is not None:
                 frames.append(f'  File "{shown}", line {tb.tb_lineno}, in {code.co_name}\n')
             tb = tb.tb_next

@@ -76,6 +76,41 @@ def test_an_exception_leaves_its_full_traceback_in_the_log():
         assert _log_lines(directory)[-1].startswith("stopped: ZeroDivisionError")
 
 
+def test_a_host_run_traceback_names_the_users_file_and_shows_only_its_frames():
+    with tmpdir.scratch() as directory:
+        source = (
+            "from openbricks.robotics import DriveBase\n\n"
+            "def build():\n    DriveBase(None, None, -5, 100)\n\nbuild()\n"
+        )
+        hub = _hub(directory, source)
+        assert hub.run_program("host run", name="mission.py", reraise_interrupt=False) == "error"
+        lines = _log_lines(directory)
+        start = lines.index("Traceback (most recent call last):")
+        assert lines[start + 1 : start + 3] == [
+            '  File "mission.py", line 6, in <module>',
+            '  File "mission.py", line 4, in build',
+        ]
+        assert lines[start + 3].startswith("ValueError: DriveBase(wheel_diameter_mm=-5)")
+        assert not any("openbricks/" in line or "program.py" in line for line in lines[start:])
+
+
+def test_user_frames_drops_the_runtimes_frames_wherever_the_runtime_lives():
+    text = (
+        "Traceback (most recent call last):\n"
+        '  File "openbricks/launcher.py", line 426, in run_program\n'
+        '  File "/lib/openbricks/robotics/drivebase.py", line 80, in __init__\n'
+        '  File "mission.py", line 4, in build\n'
+        '  File "/lib/helpers.py", line 2, in go\n'
+        "ValueError: no\n"
+    )
+    assert launcher.user_frames(text) == (
+        "Traceback (most recent call last):\n"
+        '  File "mission.py", line 4, in build\n'
+        '  File "/lib/helpers.py", line 2, in go\n'
+        "ValueError: no\n"
+    )
+
+
 def test_stop_press_engages_the_estop_and_frames_the_stop_in_the_log():
     with tmpdir.scratch() as directory:
         source = (

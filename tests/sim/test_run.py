@@ -45,6 +45,21 @@ def test_an_exception_ends_the_run_with_the_programs_traceback():
     assert result.sim_ms == 10
 
 
+def test_a_traceback_shows_the_programs_frames_only_as_on_a_hub():
+    source = (
+        "from openbricks.robotics import DriveBase\n\n"
+        "def build():\n    DriveBase(None, None, -5, 100)\n\nbuild()\n"
+    )
+    result = run(source)
+    assert result.exit == ERROR
+    assert result.error == (
+        "Traceback (most recent call last):\n"
+        '  File "mission.py", line 6, in <module>\n'
+        '  File "mission.py", line 4, in build\n'
+        "ValueError: DriveBase(wheel_diameter_mm=-5): give the measured size in mm, > 0\n"
+    )
+
+
 def test_the_simulated_time_limit_ends_an_endless_program_exactly():
     result = run("import time\nwhile True:\n    time.sleep_ms(100)\n", limit_ms=550)
     assert result.exit == TIME_LIMIT and result.sim_ms == 550

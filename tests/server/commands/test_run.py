@@ -28,13 +28,18 @@ def test_output_streams_after_a_banner_and_the_status_is_the_outcome(env, tmp_pa
 
 def test_a_program_error_shows_its_traceback_and_exits_1(env, tmp_path):
     program = tmp_path / "crash.py"
-    program.write_text("print('before')\nvalue = {}['missing']\n")
+    program.write_text("print('before')\ndef look(key):\n    return {}[key]\nlook('missing')\n")
     done = cli(env, "run", "-n", "RobotA", str(program))
     assert done.returncode == 1
-    # Source staged on a virtual hub: the traceback names the staged file and the user's line.
-    assert done.stdout.startswith("before\n") and "KeyError: 'missing'" in done.stdout
-    assert 'program.py", line 2' in done.stdout
-    assert "the program ended with an error" in done.stderr
+    # The user's file and lines, only the user's frames: not the staged /program.py, no launcher.
+    assert done.stdout == (
+        "before\n"
+        "Traceback (most recent call last):\n"
+        '  File "crash.py", line 4, in <module>\n'
+        '  File "crash.py", line 3, in look\n'
+        "KeyError: 'missing'\n"
+    )
+    assert "the program ended with an error (run " in done.stderr
 
 
 def test_a_last_line_without_newline_and_imitated_result_lines_are_shown_as_printed(env):

@@ -411,7 +411,7 @@ class _HostCalls:
         self._reply({"ok": True, "resetting": True})
         raise _HardReset
 
-    def run(self, path="/program.mpy"):
+    def run(self, path="/program.mpy", name=None):
         hub = self.hub
         hub.runs += 1
         source = hub.files.get(path)
@@ -420,7 +420,7 @@ class _HostCalls:
         namespace = {"__name__": "__main__", "__builtins__": hub._builtins()}
         self._frame("program")
         try:
-            exec(compile(source.decode(), path, "exec"), namespace)  # noqa: S102
+            exec(compile(source.decode(), name or path, "exec"), namespace)  # noqa: S102
         except KeyboardInterrupt:
             self._reply({"ok": True, "outcome": "stopped", "run": hub.runs})
             raise
