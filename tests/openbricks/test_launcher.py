@@ -79,8 +79,8 @@ def test_an_exception_leaves_its_full_traceback_in_the_log():
 def test_a_host_run_traceback_names_the_users_file_and_shows_only_its_frames():
     with tmpdir.scratch() as directory:
         source = (
-            "from openbricks.robotics import DriveBase\n\n"
-            "def build():\n    DriveBase(None, None, -5, 100)\n\nbuild()\n"
+            "from openbricks.tools import plot\n\n"
+            "def build():\n    plot('speed', float('nan'))\n\nbuild()\n"
         )
         hub = _hub(directory, source)
         assert hub.run_program("host run", name="mission.py", reraise_interrupt=False) == "error"
@@ -90,7 +90,7 @@ def test_a_host_run_traceback_names_the_users_file_and_shows_only_its_frames():
             '  File "mission.py", line 6, in <module>',
             '  File "mission.py", line 4, in build',
         ]
-        assert lines[start + 3].startswith("ValueError: DriveBase(wheel_diameter_mm=-5)")
+        assert lines[start + 3] == "ValueError: plot() value must be finite, got nan"
         assert not any("openbricks/" in line or "program.py" in line for line in lines[start:])
 
 

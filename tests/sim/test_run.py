@@ -47,8 +47,8 @@ def test_an_exception_ends_the_run_with_the_programs_traceback():
 
 def test_a_traceback_shows_the_programs_frames_only_as_on_a_hub():
     source = (
-        "from openbricks.robotics import DriveBase\n\n"
-        "def build():\n    DriveBase(None, None, -5, 100)\n\nbuild()\n"
+        "from openbricks.tools import plot\n\n"
+        "def build():\n    plot('speed', float('nan'))\n\nbuild()\n"
     )
     result = run(source)
     assert result.exit == ERROR
@@ -56,7 +56,7 @@ def test_a_traceback_shows_the_programs_frames_only_as_on_a_hub():
         "Traceback (most recent call last):\n"
         '  File "mission.py", line 6, in <module>\n'
         '  File "mission.py", line 4, in build\n'
-        "ValueError: DriveBase(wheel_diameter_mm=-5): give the measured size in mm, > 0\n"
+        "ValueError: plot() value must be finite, got nan\n"
     )
 
 
