@@ -1,5 +1,12 @@
 """Suite-wide pytest configuration."""
 
+import os
+import tempfile
+
+# A console running on this computer publishes itself in the runtime dir, and `openbricks` commands go
+# through it when they find it: the suite gets a runtime dir of its own, so its commands never do.
+os.environ["OPENBRICKS_RUNTIME_DIR"] = tempfile.mkdtemp(prefix="openbricks-test-run-")
+
 
 def pytest_collection_modifyitems(config, items):
     """Run the fast unit tests first and the slow end-to-end ones last, in one session."""

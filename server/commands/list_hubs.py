@@ -29,6 +29,11 @@ async def _ble_devices(timeout_s: float) -> list[tuple[str | None, str, int, boo
 
 
 def main(args) -> int:
+    from openbricks_server import console_client
+
+    console = console_client.running()
+    if console is not None:  # the console lists its hubs (virtual ones included) and what it scans
+        return console_client.list_hubs(console, args)
     from openbricks_server.link.discovery import virtual_hubs
 
     rows = []

@@ -53,5 +53,10 @@ async def _talk(session, args):
 
 
 def main(args) -> int:
+    from openbricks_server import console_client
+
+    console = console_client.running()
+    if console is not None:  # the console owns the hub links: through it
+        return console_client.log(console, args)
     asyncio.run(with_hub(args.name, args.scan_timeout, lambda session: _talk(session, args)))
     return EXIT_OK

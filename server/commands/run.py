@@ -133,6 +133,11 @@ async def _talk(session, program):
 def main(args) -> int:
     program = code_program(args.code) if args.code is not None else read_program(args.script)
     program = prepare(program)
+    from openbricks_server import console_client
+
+    console = console_client.running()
+    if console is not None:  # the console owns the hub links: through it, same output and status
+        return console_client.run(console, args, program)
     outcome = asyncio.run(
         with_hub(args.name, args.scan_timeout, lambda session: _talk(session, program), debug=args.debug)
     )

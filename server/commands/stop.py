@@ -34,5 +34,10 @@ async def _talk(session):
 
 
 def main(args) -> int:
+    from openbricks_server import console_client
+
+    console = console_client.running()
+    if console is not None:  # the console owns the hub links: through it
+        return console_client.stop(console, args)
     print(asyncio.run(with_hub(args.name, args.scan_timeout, _talk)))
     return EXIT_OK

@@ -41,6 +41,12 @@ def main(args) -> int:
     else:
         program = prepare(read_program(args.script))
 
+    from openbricks_server import console_client
+
+    console = console_client.running()
+    if console is not None:  # the console owns the hub links: through it
+        return console_client.upload(console, args, program)
+
     async def talk(session):
         target = await stage(session, program, args.path)
         return target

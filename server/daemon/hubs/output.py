@@ -151,6 +151,7 @@ class RunLog:
     outcome: RunOutcome | None  # None: the log has no end (the hub reset or the run is still on)
     detail: str | None
     trigger: str | None
+    text: str  # as the hub keeps it, stamps and framing lines included
 
 
 def _outcome(stopped: str) -> tuple[RunOutcome, str | None]:
@@ -205,4 +206,4 @@ def parse_run_log(text: str) -> RunLog | None:
         lines.append(OutputLine(len(lines) + 1, body, last_stamp, recv))
     if index is None or started is None:
         return None
-    return RunLog(index, started, lines, samples, outcome, detail, trigger)
+    return RunLog(index, started, lines, samples, outcome, detail, trigger, text)

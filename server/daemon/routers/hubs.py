@@ -15,7 +15,7 @@ from contextlib import contextmanager
 from fastapi import APIRouter, Depends, Path, Request
 from pydantic import BaseModel, Field, model_validator
 
-from openbricks_server.compile import Program, ProgramError, compile_program
+from openbricks_server.compile import MAX_PROGRAM_BYTES, Program, ProgramError, compile_program
 from openbricks_server.daemon.auth import Caller, require_operator, require_viewer
 from openbricks_server.daemon.errors import ApiError
 from openbricks_server.daemon.hubs.actor import HubActor
@@ -128,6 +128,7 @@ class LogText(BaseModel):
     outcome: str | None
     detail: str | None
     lines: list[LogLine]
+    text: str  # the log as the hub keeps it: `<epoch ms> <text>` lines, framing included
 
 
 @contextmanager
@@ -266,7 +267,14 @@ async def upload(
         raise ApiError.invalid(
             "bad_path", f"path {body.path!r}: give an absolute hub file path", "e.g. /lib/tools.py"
         )
-    program = await _program(request, body)
+    if body.path is not None and body.source is not None:
+        # A file stored as it is (a helper module, data): only its name and size are checked.
+        check_name(body.name)
+        if len(body.source.encode("utf-8")) > MAX_PROGRAM_BYTES:
+            raise ApiError(413, "too_large", f"{body.name} is larger than a hub accepts", "split it up")
+        program = Program(body.name, body.source)
+    else:
+        program = await _program(request, body)
     with _api_errors():
         done = await actor.upload(program, who=caller.label, path=body.path)
     return Uploaded(hub_id=actor.hub_id, path=done["path"], bytes=done["bytes"])
@@ -309,4 +317,5 @@ async def read_log(
         outcome=parsed.outcome,
         detail=parsed.detail,
         lines=[LogLine(line_no=ln.line_no, text=ln.text, hub_ms=ln.hub_ms) for ln in parsed.lines],
+        text=parsed.text,
     )
