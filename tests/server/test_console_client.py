@@ -122,4 +122,4 @@ def test_list_upload_log_and_stop_go_through_the_console(console, tmp_path):
         and "] started: host run" in shown.stdout
     )
     stopped = cli(console, "stop", "-n", "SimHub-1")
-    assert stopped.returncode == 0 and stopped.stdout == "SimHub-1: no program running\n"
+    assert stopped.returncode == 0 and stopped.stdout == "SimHub-1: no program was running\n"

@@ -58,6 +58,7 @@ STOP_RESEND_S = 1.0
 IDLE_READ_S = 3600.0
 BACKOFF_S = (0.5, 1.0, 2.0, 5.0, 10.0, 30.0)
 CONNECT_WAIT_S = 60.0
+NOTHING_RUNNING = "no program was running"
 CAPABILITY_KEYS = (
     "version",
     "runtime",
@@ -701,7 +702,8 @@ class HubActor:
         if not self.connected:
             return {"hub": self.hub_id, "name": self.name, "stopped": False, "detail": f"{self.state.status}"}
         if holder is None:
-            return {"hub": self.hub_id, "name": self.name, "stopped": False, "detail": "nothing was running"}
+            return {"hub": self.hub_id, "name": self.name, "stopped": False, "detail": NOTHING_RUNNING}
+        run = self._current_run or self._button_run
         loop = asyncio.get_running_loop()
         deadline = loop.time() + STOP_CONFIRM_S
         while self._holder is holder and loop.time() < deadline:
@@ -722,8 +724,16 @@ class HubActor:
             "hub": self.hub_id,
             "name": self.name,
             "stopped": True,
-            "detail": f"stopped {holder.operation}",
+            "detail": _stopped_detail(holder, run),
         }
+
+
+def _stopped_detail(holder: Holder, run: _LiveRun | None) -> str:
+    """What was stopped, in `openbricks stop`'s words when it was a program."""
+    if run is not None and run.index is not None:
+        trigger = "button press" if run.origin == "button" else "host run"
+        return f"stopped the program (run {run.index}, started by {trigger})"
+    return f"stopped {holder.operation}"
 
 
 def _settle(future: asyncio.Future, result: Any, error: BaseException | None) -> None:

@@ -132,7 +132,7 @@ def test_stop_all_reaches_every_hub_at_once_and_reports_each(data_dir):
     reports, idle_again, outcomes = asyncio.run(scenario())
     assert [(r["name"], r["stopped"]) for r in reports] == [("SimHub-1", True), ("SimHub-2", True)]
     assert outcomes == ["stopped", "stopped"]
-    assert [r["detail"] for r in idle_again] == ["nothing was running", "nothing was running"]
+    assert [r["detail"] for r in idle_again] == ["no program was running", "no program was running"]
 
 
 def test_a_run_started_with_the_hub_button_is_captured_live_and_matched_to_its_log(data_dir):

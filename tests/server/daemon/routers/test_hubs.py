@@ -109,6 +109,8 @@ def test_a_busy_hub_answers_409_naming_the_holder_and_stop_all_reaches_every_hub
         assert body["detail"]["holder"]["operation"] == "run" and body["hint"]
         stopped = api.post("/api/hubs/stop-all").json()["hubs"]
         assert [(r["name"], r["stopped"]) for r in stopped] == [("SimHub-1", True), ("SimHub-2", True)]
+        assert all(r["detail"].startswith("stopped the program (run ") for r in stopped)
+        assert all(r["detail"].endswith(", started by host run)") for r in stopped)
         assert wait_ended(api, first)["outcome"] == "stopped"
         assert wait_ended(api, second)["outcome"] == "stopped"
 
