@@ -21,8 +21,13 @@ def takes_bytecode(info) -> bool:
     return bool(info.accepts_mpy) and info.mpy_version == MPY_MAJOR
 
 
-async def stage(session, program: Program, path: str | None = None) -> str:
-    """Stage `program` on the hub; returns the hub path it landed at."""
+def _to_stderr(text: str) -> None:
+    print(text, file=sys.stderr)
+
+
+async def stage(session, program: Program, path: str | None = None, notice=_to_stderr) -> str:
+    """Stage `program` on the hub; returns the hub path it landed at. `notice(text)` hears why the
+    source goes instead of bytecode (the terminal's stderr; the console's log)."""
     info = session.info
     if path is not None:  # upload --path: the file as it is, where the user says
         data, target = program.source_bytes, path
@@ -32,7 +37,7 @@ async def stage(session, program: Program, path: str | None = None) -> str:
         reason = (
             "it is a virtual hub" if session.virtual else f"its runtime ({info.runtime}) loads no .mpy v6"
         )
-        print(f"{session.name} cannot load compiled programs ({reason}): sending the source", file=sys.stderr)
+        notice(f"{session.name} cannot load compiled programs ({reason}): sending the source")
         data, target = program.source_bytes, SOURCE_PROGRAM_PATH
     if info.max_program_bytes:
         try:

@@ -26,6 +26,7 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import dataclasses
+import logging
 import secrets
 from collections.abc import Awaitable, Callable
 from dataclasses import dataclass
@@ -49,6 +50,8 @@ from openbricks_server.link import HubCallError, HubException, LinkDropped, Link
 from openbricks_server.link.base import Link
 from openbricks_server.link.host_call import HubInfo, call_source
 from openbricks_server.link.raw_repl import RawRepl
+
+log = logging.getLogger(__name__)
 
 ENTER_TIMEOUT_S = 10.0
 HAND_BACK_TIMEOUT_S = 3.0
@@ -585,7 +588,7 @@ class HubActor:
     async def _run_work(self, live: _LiveRun, program: Program) -> dict:
         from openbricks_server.staging import stage
 
-        path = await stage(self._session(), program)
+        path = await stage(self._session(), program, notice=log.debug)
         self.state.staged_program = live.program_name
         nonce = secrets.token_hex(4)
 
@@ -638,7 +641,7 @@ class HubActor:
         from openbricks_server.staging import stage
 
         async def work():
-            target = await stage(self._session(), program, path)
+            target = await stage(self._session(), program, path, notice=log.debug)
             if path is None:
                 self.state.staged_program = program.filename
             return {"path": target, "bytes": len(program.mpy or program.source_bytes)}

@@ -59,6 +59,8 @@ class HubManager:
         self.ble_client_backend = ble_client_backend
         self.ble_scanner_backend = ble_scanner_backend
         self.ble_status = "not started"
+        self.scan_s = SCAN_S
+        self.scan_pause_s = SCAN_PAUSE_S
         self._actors: dict[str, HubActor] = {}
         self._tasks: list[asyncio.Task] = []
 
@@ -155,7 +157,7 @@ class HubManager:
 
         while True:
             try:
-                adverts = await scan(SCAN_S, scanner_backend=self.ble_scanner_backend)
+                adverts = await scan(self.scan_s, scanner_backend=self.ble_scanner_backend)
             except asyncio.CancelledError:
                 raise
             except Exception as exc:  # noqa: BLE001 - no adapter, no D-Bus, radio off: all mean "no BLE"
@@ -178,7 +180,7 @@ class HubManager:
                     actor.backend.device = advert.device
                     actor.rename(advert.name)
                 actor.seen(advert.rssi)
-            await asyncio.sleep(SCAN_PAUSE_S)
+            await asyncio.sleep(self.scan_pause_s)
 
     async def _find_local_virtual_hubs(self) -> None:
         """Virtual hubs started by hand on this computer are listed too (connected on request)."""
