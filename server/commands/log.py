@@ -45,10 +45,9 @@ async def _talk(session, args):
     renderer = LogRenderer(out.write)
     offset = 0
     while offset is not None:
-        part = await session.call("read_run", index=index, offset=offset)
-        renderer.feed(part["text"])
+        text, offset = await session.repl.read_run_page(index, offset)
+        renderer.feed(text)
         out.flush()
-        offset = part["next_offset"]
     renderer.finish()
 
 

@@ -20,7 +20,7 @@ from typing import Any
 
 from openbricks_server.link import file_transfer
 from openbricks_server.link.base import Link
-from openbricks_server.link.errors import HubException, LinkDropped, LinkTimeout
+from openbricks_server.link.errors import HubException, LinkDropped, LinkTimeout, ProtocolError
 from openbricks_server.link.host_call import CallOutput, Command, HubInfo, command, single_result
 from openbricks_server.link.raw_paste import RAW_BANNER, CommandInput
 
@@ -400,6 +400,23 @@ class RawRepl:
                 return single_result(self.hub, "run", exc.results, exc.stdout)
             raise
         return single_result(self.hub, "run", result.results, result.stdout)
+
+    async def read_run_page(self, index: int, offset: int, *, timeout_s: float | None = None):
+        """One slice of run `index`'s log from byte `offset`: (text, next offset or None). A reply
+        that is not the slice asked for (damaged on the way) is a ProtocolError, never a KeyError."""
+        reply = await self.call("read_run", index=index, offset=offset, timeout_s=timeout_s)
+        text, following = reply.get("text"), reply.get("next_offset", -1)
+        if (
+            reply.get("index") != index
+            or reply.get("offset") != offset
+            or not isinstance(text, str)
+            or not (following is None or (isinstance(following, int) and following > offset))
+        ):
+            raise ProtocolError(
+                f"{self.hub} answered {str(reply)[:80]!r} for run {index}'s log at byte {offset}: "
+                "the reply was damaged on the way; read the log again"
+            )
+        return text, following
 
     # -- files ----------------------------------------------------------------------------------
 

@@ -57,6 +57,9 @@ class ScriptedHub:
         self.commands: list[str] = []
         self.epoch_ms: int | None = None
         self.runs = 0
+        #: Each run's printed text by run number, as the hub's run log holds it (read_run pages it).
+        self.run_logs: dict[int, str] = {}
+        self.logging_run: int | None = None
         self._send: Callable[[bytes], None] = lambda data: None
         self._loop: asyncio.AbstractEventLoop | None = None
         self._mode = "friendly"  # friendly | raw | paste | busy
@@ -204,6 +207,12 @@ class ScriptedHub:
     def _stdout(self, text: str) -> None:
         self._post(self._send, text.replace("\n", "\r\n").encode())
 
+    def _program_print(self, text: str) -> None:
+        """A running program's print: to the console and into its run log, as the launcher tees it."""
+        if self.logging_run is not None:
+            self.run_logs[self.logging_run] += text
+        self._stdout(text)
+
     def _run_command(self, text: str) -> None:
         stderr = b""
         namespace = {"__name__": "__main__", "__builtins__": self._builtins()}
@@ -250,7 +259,7 @@ class ScriptedHub:
         names = dict(vars(builtins))
 
         def hub_print(*args, sep=" ", end="\n", file=None):
-            hub._stdout(sep.join(str(a) for a in args) + end)
+            hub._program_print(sep.join(str(a) for a in args) + end)
 
         def hub_import(name, globals=None, locals=None, fromlist=(), level=0):
             if name == "openbricks.host_calls":
@@ -411,20 +420,45 @@ class _HostCalls:
         self._reply({"ok": True, "resetting": True})
         raise _HardReset
 
+    def read_run(self, index, offset=0, max_bytes=8192):
+        def _read():
+            text = self.hub.run_logs.get(index)
+            if text is None:
+                raise OSError(f"no log of run {index}")
+            data = text.encode()
+            piece = data[offset : offset + max_bytes]
+            cut = piece.rfind(b"\n") + 1 if offset + len(piece) < len(data) else len(piece)
+            piece = piece[: cut or len(piece)]
+            end = offset + len(piece)
+            return {
+                "index": index,
+                "offset": offset,
+                "text": piece.decode(),
+                "next_offset": end if end < len(data) else None,
+                "total_bytes": len(data),
+            }
+
+        return self._call(_read)
+
     def run(self, path="/program.mpy", name=None):
         hub = self.hub
         hub.runs += 1
+        hub.run_logs[hub.runs] = ""
         source = hub.files.get(path)
         if source is None:
             return self._reply({"ok": False, "type": "OSError", "error": f"no program staged at {path}"})
         namespace = {"__name__": "__main__", "__builtins__": hub._builtins()}
         self._frame("program")
+        hub.logging_run = hub.runs
         try:
             exec(compile(source.decode(), name or path, "exec"), namespace)  # noqa: S102
         except KeyboardInterrupt:
+            hub.logging_run = None
             self._reply({"ok": True, "outcome": "stopped", "run": hub.runs})
             raise
         except Exception as exc:  # noqa: BLE001
+            hub.logging_run = None
             hub._stdout(f"Traceback (most recent call last):\n{type(exc).__name__}: {exc}\n")
             return self._reply({"ok": True, "outcome": "error", "run": hub.runs})
+        hub.logging_run = None
         return self._reply({"ok": True, "outcome": "finished", "run": hub.runs})
