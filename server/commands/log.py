@@ -7,23 +7,7 @@ import sys
 
 from openbricks_server.errors import EXIT_OK, CliError
 from openbricks_server.hub_session import with_hub
-from openbricks_server.logview import LogRenderer
-
-
-def _span(indices: list[int]) -> str:
-    if indices == list(range(indices[0], indices[-1] + 1)) and len(indices) > 2:
-        return f"{indices[0]}..{indices[-1]}"
-    return ", ".join(str(i) for i in indices)
-
-
-def missing_run(name: str, index: int, indices: list[int], slots: int) -> str:
-    """Why run `index` can't be shown: never happened, overwritten, or lost; with what can be shown."""
-    kept = f"runs you can show: {_span(indices)}"
-    if index > indices[-1]:
-        return f"{name} has no run {index}: no such run exists yet (the newest is run {indices[-1]}); {kept}"
-    if index < indices[0]:
-        return f"run {index} of {name} was overwritten: a hub keeps only its last {slots} runs; {kept}"
-    return f"{name} has no log of run {index} (its slot was reused or removed); {kept}"
+from openbricks_server.logview import LogRenderer, missing_run
 
 
 async def _talk(session, args):

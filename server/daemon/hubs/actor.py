@@ -42,6 +42,7 @@ from openbricks_server.daemon.hubs.errors import (
     HubOfflineError,
     HubOperationError,
     HubRefusedError,
+    LogNotFoundError,
     ProgramRejectedError,
 )
 from openbricks_server.daemon.hubs.output import LineCounter, OutputParser, RunLog, now_ms, parse_run_log
@@ -50,6 +51,8 @@ from openbricks_server.link import HubCallError, HubException, LinkDropped, Link
 from openbricks_server.link.base import Link
 from openbricks_server.link.host_call import HubInfo, call_source
 from openbricks_server.link.raw_repl import RawRepl
+from openbricks_server.logview import missing_run
+from openbricks_server.staging import StorageError
 
 log = logging.getLogger(__name__)
 
@@ -463,6 +466,8 @@ class HubActor:
             error = exc
         except ProgramError as exc:
             error = ProgramRejectedError(str(exc), "fix the program and send it again")
+        except StorageError as exc:
+            error = HubRefusedError(str(exc), "store it at another path on the hub")
         except HubCallError as exc:
             error = HubRefusedError(f"{self.name}: {exc.error}", "see the message")
         except HubException as exc:
@@ -671,13 +676,26 @@ class HubActor:
         parts = []
         offset = 0
         while offset is not None:
-            page = await self._repl.call("read_run", index=index, offset=offset)
+            try:
+                page = await self._repl.call("read_run", index=index, offset=offset)
+            except HubCallError:
+                if offset == 0:
+                    await self._refuse_missing_log(index)
+                raise
             parts.append(page["text"])
             offset = page["next_offset"]
         parsed = parse_run_log("".join(parts))
         if parsed is None:
             raise HubRefusedError(f"run log {index} on {self.name} is not a run log", "")
         return parsed
+
+    async def _refuse_missing_log(self, index: int) -> None:
+        """LogNotFoundError saying why run `index` is not on the hub, if it is not."""
+        reply = await self._repl.call("runs")
+        indices = [int(entry["index"]) for entry in reply["runs"]]
+        if index not in indices:
+            message = missing_run(self.name, index, indices, int(reply.get("slots", 10)))
+            raise LogNotFoundError(message, "GET /api/hubs/{hub}/logs lists the runs kept")
 
     async def _pull_logs(self) -> None:
         """Report every run-log slot not reported yet (the store matches it to a live run)."""

@@ -46,6 +46,13 @@ class HubRefusedError(HubOperationError):
     error = "hub_refused"
 
 
+class LogNotFoundError(HubOperationError):
+    """The run log asked for is not on the hub: it never existed, or a newer run took its slot."""
+
+    status = 404
+    error = "log_not_found"
+
+
 class HubLinkError(HubOperationError):
     """The link failed during the operation (dropped, timed out)."""
 

@@ -591,6 +591,133 @@ API_CASES = [
         role="viewer",
         json={"source": "x = 1"},
     ),
+    # the hubs API, with one virtual hub (SimHub-1)
+    api("unknown-hub", "GET", "/api/hubs/Nope", 404, "hub_not_found", "no hub 'Nope' (hubs: SimHub-1)"),
+    api(
+        "run-on-unknown-hub",
+        "POST",
+        "/api/hubs/Nope/run",
+        404,
+        "hub_not_found",
+        "no hub 'Nope'",
+        json={"source": "pass"},
+    ),
+    api(
+        "hub-run-syntax-error",
+        "POST",
+        "/api/hubs/SimHub-1/run",
+        422,
+        "syntax_error",
+        "'(' was never closed",
+        json={"source": "print(1"},
+    ),
+    api(
+        "hub-run-source-and-program",
+        "POST",
+        "/api/hubs/SimHub-1/run",
+        422,
+        "invalid_request",
+        "give either `source`",
+        json={"source": "pass", "program": "x.py"},
+    ),
+    api(
+        "hub-run-nothing",
+        "POST",
+        "/api/hubs/SimHub-1/run",
+        422,
+        "invalid_request",
+        "give either `source`",
+        json={},
+    ),
+    api(
+        "hub-run-unknown-program",
+        "POST",
+        "/api/hubs/SimHub-1/run",
+        404,
+        "not_found",
+        "program 'nope.py' not found",
+        json={"program": "nope.py"},
+    ),
+    api(
+        "hub-run-name-traversal",
+        "POST",
+        "/api/hubs/SimHub-1/run",
+        422,
+        "bad_program_name",
+        "'../../x.py' is not a program name",
+        json={"source": "pass", "name": "../../x.py"},
+    ),
+    api(
+        "hub-run-oversized",
+        "POST",
+        "/api/hubs/SimHub-1/run",
+        413,
+        "program_too_large",
+        f"{OVERSIZED_BYTES} bytes",
+        json={"source": "#" * OVERSIZED_BYTES},
+    ),
+    api(
+        "hub-run-binary",
+        "POST",
+        "/api/hubs/SimHub-1/run",
+        422,
+        "binary_program",
+        "control character 0x00",
+        json={"source": "print(1)\x00"},
+    ),
+    api(
+        "hub-run-desktop-only-syntax",
+        "POST",
+        "/api/hubs/SimHub-1/run",
+        422,
+        "program_invalid",
+        "MicroPython does not support it",
+        json={"source": "match x:\n    case 1:\n        pass\n"},
+    ),
+    api(
+        "hub-upload-path-traversal",
+        "POST",
+        "/api/hubs/SimHub-1/upload",
+        422,
+        "bad_path",
+        "give an absolute hub file path",
+        json={"source": "pass", "path": "/../etc/passwd"},
+    ),
+    api(
+        "hub-upload-missing-folder",
+        "POST",
+        "/api/hubs/SimHub-1/upload",
+        422,
+        "hub_refused",
+        "there is no folder /nodir on the hub",
+        json={"source": "pass", "path": "/nodir/x.py"},
+    ),
+    api(
+        "hub-identify-zero",
+        "POST",
+        "/api/hubs/SimHub-1/identify",
+        422,
+        "invalid_request",
+        "duration_ms",
+        json={"duration_ms": 0},
+    ),
+    api(
+        "hub-log-never-was",
+        "GET",
+        "/api/hubs/SimHub-1/logs/99",
+        404,
+        "log_not_found",
+        "SimHub-1 has no run 99",
+    ),
+    api(
+        "hub-log-negative",
+        "GET",
+        "/api/hubs/SimHub-1/logs/-1",
+        422,
+        "invalid_request",
+        "greater than or equal to 0",
+    ),
+    api("hub-log-word", "GET", "/api/hubs/SimHub-1/logs/last", 422, "invalid_request", "valid integer"),
     api(
         "foreign-host",
         "GET",
@@ -605,12 +732,24 @@ API_CASES = [
 
 @pytest.fixture(scope="module")
 def console(tmp_path_factory):
-    from ..daemon.conftest import start_daemon
+    from openbricks_server.daemon.config import DaemonConfig
 
-    running = start_daemon(tmp_path_factory.mktemp("console") / "data")
-    running.viewer_token = running.ctx.store.tokens.mint("viewer", "mentor")
-    yield running
-    running.stop()
+    from ..daemon.conftest import Daemon
+
+    data = tmp_path_factory.mktemp("console") / "data"
+    with pytest.MonkeyPatch.context() as env:
+        env.setenv("OPENBRICKS_DATA_DIR", str(data))  # where its virtual hub keeps its flash
+        running = Daemon(DaemonConfig(host="127.0.0.1", port=0, virtual=1, ble=False, data_dir=data))
+        try:
+            running.viewer_token = running.ctx.store.tokens.mint("viewer", "mentor")
+            with running.client() as client:
+                deadline = time.monotonic() + 60
+                while [h["status"] for h in client.get("/api/hubs").json()["hubs"]] != ["idle"]:
+                    assert time.monotonic() < deadline, "the console's virtual hub never came up"
+                    time.sleep(0.1)
+            yield running
+        finally:
+            running.stop()
 
 
 @pytest.mark.parametrize("bad", API_CASES)
@@ -634,7 +773,9 @@ def test_bad_requests_get_a_specific_status_and_the_error_shape(bad: ApiCase, co
     assert body["message"] and body.get("hint"), f"no message or hint: {body}"
     for words in bad.words:
         assert words in body["message"] + body["hint"], body
-    assert not _TRACEBACK.search(answer.text) and not _EXCEPTION_NAME.search(answer.text), answer.text
+    leaked = {name for name in _EXCEPTION_NAME.findall(answer.text) if name not in _USER_FACING}
+    assert not _TRACEBACK.search(answer.text) and not leaked, answer.text
+    assert not _ERRNO.search(answer.text), answer.text
 
 
 WS_CASES = [
