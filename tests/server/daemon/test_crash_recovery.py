@@ -1,5 +1,6 @@
-"""`kill -9` of the daemon while 20 runs print: on restart the database is intact, every run is there,
-marked interrupted, and every line the daemon had held for one flush interval was kept."""
+"""`kill -9` of the daemon while runs print: on restart the database is intact, every run is there,
+marked interrupted, every line the daemon had held for one flush interval was kept, and a hub's run log
+fills in the lines the daemon never saw."""
 
 import json
 import os
@@ -13,6 +14,7 @@ from pathlib import Path
 
 import httpx
 import pytest
+from websockets.sync.client import connect
 
 from openbricks_server.daemon.config import DB_FILENAME
 
@@ -104,3 +106,96 @@ def test_kill_9_during_20_runs_loses_nothing_that_was_flushed(tmp_path):
             restarted.wait(30)
         except subprocess.TimeoutExpired:
             restarted.kill()
+
+
+def _start_console(tmp_path, data_dir, virtual):
+    env = dict(os.environ, OPENBRICKS_RUNTIME_DIR=str(tmp_path / "run"), OPENBRICKS_DATA_DIR=str(tmp_path))
+    console = subprocess.Popen(
+        [
+            sys.executable,
+            "-m",
+            "openbricks_server.cli",
+            "console",
+            "--port",
+            "0",
+            "--virtual",
+            str(virtual),
+            "--no-ble",
+            "--data-dir",
+            str(data_dir),
+        ],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env=env,
+    )
+    match = re.search(r"open (http://\S+)/\?token=(\S+)", console.stdout.readline())
+    assert match, console.stderr.read()
+    url, token = match.groups()
+    return console, url, httpx.Client(base_url=url, headers={"Authorization": f"Bearer {token}"}, timeout=30)
+
+
+def _hub_processes(data_dir) -> list[int]:
+    found = subprocess.run(
+        ["pgrep", "-f", "--", f"--dir {data_dir}/virtual-hubs/"], capture_output=True, text=True
+    )
+    return [int(pid) for pid in found.stdout.split()]
+
+
+def _until(check, timeout_s=90, step_s=0.3):
+    deadline = time.monotonic() + timeout_s
+    while not (result := check()):
+        assert time.monotonic() < deadline, "timed out"
+        time.sleep(step_s)
+    return result
+
+
+PROGRAM = """import time
+for i in range(40):
+    print('line', i)
+    time.sleep(0.05)
+time.sleep(1)
+print('end')
+"""
+
+
+@pytest.mark.e2e
+def test_after_kill_9_the_hubs_run_log_fills_in_what_the_daemon_never_saw(tmp_path):
+    data_dir = tmp_path / "console"
+    console, url, client = _start_console(tmp_path, data_dir, virtual=1)
+    try:
+        _until(lambda: [h for h in client.get("/api/hubs").json()["hubs"] if h["status"] == "idle"])
+        headers = {"Authorization": client.headers["Authorization"]}
+        with connect(
+            url.replace("http://", "ws://") + "/api/events", origin=url, additional_headers=headers
+        ) as ws:
+            started = client.post("/api/hubs/SimHub-1/run", json={"source": PROGRAM, "name": "count.py"})
+            assert started.status_code == 200, started.text
+            run_id = started.json()["run_id"]
+            seen = 0
+            while seen < 10:  # the daemon is mid-run: it has shown 10 lines
+                message = json.loads(ws.recv(timeout=30))
+                if message["type"] == "output" and message["run"] == run_id:
+                    seen = max(line["line_no"] for line in message["data"]["lines"])
+        os.kill(console.pid, signal.SIGKILL)
+        console.wait(10)
+        # The hub runs on without its host, as a real one does, and keeps its run log; then it is
+        # switched off (its process was the killed daemon's child).
+        time.sleep(4)
+        for pid in _hub_processes(data_dir):
+            os.kill(pid, signal.SIGKILL)
+
+        console, url, client = _start_console(tmp_path, data_dir, virtual=1)
+        run = _until(lambda: (r := client.get(f"/api/runs/{run_id}").json())["line_count"] >= 41 and r)
+        lines = client.get(f"/api/runs/{run_id}/output").json()["lines"]
+        assert [line["text"] for line in lines] == [f"line {i}" for i in range(40)] + ["end"]
+        assert run["outcome"] == "interrupted"
+        assert [r["run_id"] for r in client.get("/api/runs").json()] == [run_id]  # one run, not two
+    finally:
+        console.send_signal(signal.SIGINT)
+        try:
+            console.wait(30)
+        except subprocess.TimeoutExpired:
+            console.kill()
+        for pid in _hub_processes(data_dir):
+            os.kill(pid, signal.SIGKILL)
