@@ -5,8 +5,8 @@ MicroPython image for the ESP32: they can import only what that image has,
 and nothing of the host. The MicroPython run
 (tests/micropython) proves each module imports on the WebAssembly port, but
 that port carries extras the hub lacks (functools, logging, inspect, ...), so
-the allowlist below is the hub's own list: MicroPython's ESP32 port with the
-options firmware/ builds it with.
+the allowlist is the hub's own list (openbricks_sim/hub_modules.py, which the
+simulator also holds programs to): MicroPython's ESP32 port as firmware/ builds it.
 """
 
 import ast
@@ -14,34 +14,11 @@ from pathlib import Path
 
 import pytest
 
+from openbricks_sim.hub_modules import HUB_MODULES, REFUSED
+
 REPO = Path(__file__).resolve().parents[1]
 RUNTIME_DIR = REPO / "openbricks"
 FROZEN_DIR = REPO / "firmware" / "frozen"
-
-# Built into MicroPython's ESP32 port (MicroPython library docs, "ESP32 quick reference").
-HUB_MODULES = {
-    # the board, the radio and the firmware's own C module of control cores
-    "machine", "esp", "esp32", "bluetooth", "_openbricks_native", "micropython",
-    # the interpreter's built-in modules
-    "builtins", "sys", "gc", "time", "struct", "os", "vfs", "math", "cmath", "array", "select", "io",
-    "json", "errno", "binascii", "deflate", "collections", "random", "re", "hashlib", "heapq",
-    "framebuf", "uctypes", "platform", "btree", "cryptolib",
-    # frozen into the image by firmware/manifest.py
-    "asyncio", "neopixel",
-}  # fmt: skip
-
-# On the port, but not in an openbricks image or not for the runtime: the reason is the message.
-REFUSED = {
-    "network": "WiFi is off in openbricks images (firmware/boards/sdkconfig.nowifi); the host talks over BLE",
-    "socket": "WiFi is off in openbricks images; the host talks over BLE",
-    "ssl": "WiFi is off in openbricks images; the host talks over BLE",
-    "espnow": "WiFi and ESP-NOW are off in openbricks images",
-    "webrepl": "WiFi is off in openbricks images; the REPL reaches the host over BLE or USB",
-    "_thread": "the runtime is single-threaded: periodic work runs in machine.Timer callbacks",
-    "openbricks_native": "that is the host build of the control cores; on the hub it is `_openbricks_native`",
-    "openbricks_sim": "the simulator is host code; the runtime must not depend on it",
-    "openbricks_server": "the CLI and daemon are host code; the runtime must not depend on them",
-}
 
 HOST_LAYERS = ("openbricks_server", "openbricks_sim")
 

@@ -4,9 +4,13 @@ The hub process is CPython, and its own machinery (the link threads, MuJoCo, the
 keep the host's `os`, `open` and `sys`. So hub code gets its own builtins module instead of patched
 process-wide modules:
 
-- `open` opens files on the hub's flash (HubFS), `import os` / `import uos` give the flash's
-  MicroPython `os`, `import sys` a `sys` with MicroPython's `path` (['', '.frozen', '/lib']),
-  `print_exception` and a hub `implementation`, and `import time` the simulator's MicroPython time
+- imports reach only what the hub has: the modules of MicroPython's ESP32 port
+  (hub_modules.py, the list the runtime is held to), the runtime, and modules on the flash; any
+  other name is `ImportError: no module named 'subprocess'`, as on the hub;
+- `open` and `io.open` open files on the hub's flash (HubFS), `import os` / `import uos` give the
+  flash's MicroPython `os`, `import sys` a `sys` with MicroPython's attributes only (`path`
+  ['', '.frozen', '/lib'], `print_exception`, an `implementation` named 'micropython', a
+  `modules` that shows hub modules only), and `import time` the simulator's MicroPython time
   with sleeps paced by the hub (see world.py);
 - `import gc` adds MicroPython's mem_free()/mem_alloc() (what is left before a MemoryError);
 - `import deflate` gives MicroPython's deflate (the host compresses staged programs with it);
@@ -18,6 +22,9 @@ process-wide modules:
 
 Code the REPL runs goes through `HubPython.run()`, and tracebacks print as MicroPython prints
 them: frames of hub code only, and MicroPython's exception names (OSError for FileNotFoundError).
+
+This keeps programs on the hub's API; it is not a security boundary (Python code can reach the
+interpreter's internals). The process's OS-level fence (limits.contain) is what holds then.
 """
 
 import builtins
@@ -27,26 +34,24 @@ import importlib.util
 import os
 import sys
 import types
+from collections.abc import MutableMapping
 
+from ..hub_modules import RUNTIME_PACKAGE, hub_name
 from . import deflate_module
 from .hub_fs import HubFS
 
-RUNTIME_PACKAGE = "openbricks"
 FLASH_PATH_PREFIX = "<hub-flash>:"  # marks a package __path__ entry that lives on the hub's flash
 DEFAULT_SYS_PATH = ("", ".frozen", "/lib")
-MODULE_ALIASES = {"uos": "os", "utime": "time", "usys": "sys"}
 HIDDEN_BUILTINS = ("exit", "quit", "copyright", "credits", "license")
-# Names a hub resolves before its filesystem (built into the firmware), whatever the flash holds.
-_BUILTIN_NAMES = frozenset(sys.stdlib_module_names) | {
-    "machine",
-    "micropython",
-    "esp32",
-    "bluetooth",
-    "neopixel",
-    "_openbricks_native",
-    "deflate",
-    RUNTIME_PACKAGE,
-}
+# MicroPython 1.27's sys.implementation.version (the port the firmware builds)
+MICROPYTHON_VERSION = (1, 27, 0, "")
+# What MicroPython's `sys` has; hub code sees these of the host's sys and nothing else.
+SYS_ATTRIBUTES = frozenset(
+    ("argv", "byteorder", "exc_info", "exit", "maxsize", "modules", "stderr", "stdin", "stdout")
+    + ("version", "version_info", "settrace", "tracebacklimit", "ps1", "ps2")
+)
+# What MicroPython's `io` has; `open` is the flash's.
+IO_ATTRIBUTES = ("IOBase", "StringIO", "BytesIO", "BufferedWriter")
 
 
 # -- tracebacks --------------------------------------------------------------------------------
@@ -184,10 +189,48 @@ class HubFinder(importlib.abc.MetaPathFinder):
 
 
 class _HubSys(types.ModuleType):
-    """`sys` for hub code: MicroPython's additions over the host's (everything else passes through)."""
+    """`sys` for hub code: MicroPython's attributes, the live ones (stdout, ...) from the host's."""
 
     def __getattr__(self, name):
-        return getattr(sys, name)
+        if name in SYS_ATTRIBUTES:
+            return getattr(sys, name)
+        raise AttributeError(f"'module' object has no attribute '{name}'")
+
+
+class _HubModules(MutableMapping):
+    """`sys.modules` as hub code sees it: the hub modules and flash modules loaded so far (the
+    facades for os, sys, ...), never the host's own; deleting one lets it load afresh."""
+
+    def __init__(self, hub):
+        self._hub = hub
+
+    def _visible(self, name):
+        top = name.partition(".")[0]
+        if self._hub._facade(top) is not None:
+            return name == top
+        return hub_name(top) == top or top in self._hub.flash_modules
+
+    def __getitem__(self, name):
+        if not isinstance(name, str) or not self._visible(name):
+            raise KeyError(name)
+        facade = self._hub._facade(name)
+        return facade if facade is not None else sys.modules[name]
+
+    def __setitem__(self, name, module):
+        if name in sys.modules and not self._visible(name):
+            raise KeyError(name)  # the host's own module of that name stays
+        sys.modules[name] = module
+
+    def __delitem__(self, name):
+        if not self._visible(name) or self._hub._facade(name) is not None:
+            raise KeyError(name)
+        del sys.modules[name]
+
+    def __iter__(self):
+        return iter([name for name in list(sys.modules) if self._visible(name)])
+
+    def __len__(self):
+        return sum(1 for _ in self)
 
 
 class HubPython:
@@ -224,6 +267,7 @@ class HubPython:
         self.os = self.fs.os_module()
         self.os.dupterm = _no_dupterm
         self.gc = _make_gc()
+        self.io = self._make_io()
         self.sys = self._make_sys()
         self.builtins = self._make_builtins()
         self.namespace = {"__name__": "__main__", "__builtins__": self.builtins}
@@ -248,14 +292,19 @@ class HubPython:
         module.argv = []
         module.platform = "esp32"
         module.print_exception = self.traceback.print_exception
-        impl = sys.implementation
+        module.modules = _HubModules(self)
         module.implementation = types.SimpleNamespace(
-            name=impl.name,
-            version=impl.version,
-            cache_tag=impl.cache_tag,
-            hexversion=impl.hexversion,
-            _machine=self._machine_name,
+            name="micropython", version=MICROPYTHON_VERSION, _machine=self._machine_name
         )
+        return module
+
+    def _make_io(self):
+        import io
+
+        module = types.ModuleType("io", "MicroPython's io: streams, and open() on the hub's flash.")
+        for name in IO_ATTRIBUTES:
+            setattr(module, name, getattr(io, name))
+        module.open = self.fs.open
         return module
 
     def _make_builtins(self):
@@ -273,7 +322,9 @@ class HubPython:
     # -- imports -------------------------------------------------------------------------------------
 
     def _facade(self, name):
-        name = MODULE_ALIASES.get(name, name)
+        name = hub_name(name) or name
+        if name == "io":
+            return self.io
         if name == "os":
             return self.os
         if name == "sys":
@@ -296,8 +347,13 @@ class HubPython:
                 if rest:
                     raise ImportError(f"no module named '{name}'")
                 return facade
-            if top not in sys.modules and top not in _BUILTIN_NAMES:
-                self._import_from_flash(top)
+            hub = hub_name(top)
+            if hub is None:
+                loaded = top in self.flash_modules and top in sys.modules
+                if not loaded and not self._import_from_flash(top):
+                    raise ImportError(f"no module named '{name}'")
+            elif hub != top:  # a deprecated u-prefixed name: ujson is json
+                name = hub + name[len(top) :]
         return builtins.__import__(name, globals, locals, fromlist, level)
 
     def _search_dirs(self):
@@ -309,9 +365,10 @@ class HubPython:
         return dirs
 
     def _import_from_flash(self, name):
+        """Import module `name` from the flash's search path; False if it is not there."""
         spec = self.find_on_flash(name, self._search_dirs())
         if spec is None:
-            return
+            return False
         module = importlib.util.module_from_spec(spec)
         sys.modules[name] = module
         try:
@@ -320,6 +377,7 @@ class HubPython:
             sys.modules.pop(name, None)
             self.flash_modules.discard(name)
             raise
+        return True
 
     def find_on_flash(self, fullname, hub_dirs):
         """The spec of module `fullname` in one of the flash directories, or None."""

@@ -110,6 +110,41 @@ def test_a_busy_loop_that_swallows_interrupts_still_ends(tmp_path):
     assert took < 30
 
 
+@pytest.mark.e2e
+@pytest.mark.parametrize(
+    ("source", "message"),
+    [
+        ("import subprocess\n", "ImportError: no module named 'subprocess'"),
+        ("import io\nprint(io.open('/etc/passwd').read())\n", "OSError: [Errno 2] ENOENT"),
+        ("print(open('../../../etc/passwd').read())\n", "OSError: [Errno 2] ENOENT"),
+        ("import os\nos.fork()\n", "AttributeError: module 'os' has no attribute 'fork'"),
+        # Past the hub's Python to the host's os module: the kernel still refuses a new process.
+        ("open.__func__.__globals__['os'].fork()\n", "OSError: [Errno 1] Operation not permitted"),
+        (
+            "open.__func__.__globals__['os'].system('touch /tmp/openbricks-escaped')\n",
+            "",  # os.system's fork fails: it returns -1, nothing ran
+        ),
+    ],
+    ids=[
+        "import-subprocess",
+        "io-open-etc-passwd",
+        "open-dotdot",
+        "os-fork",
+        "escaped-fork",
+        "escaped-system",
+    ],
+)
+def test_a_program_reaches_only_the_hub(tmp_path, source, message):
+    marker = "/tmp/openbricks-escaped"
+    if os.path.exists(marker):
+        os.remove(marker)
+    done, took = sim_run(write(tmp_path, "reach.py", source))
+    assert message in done.stderr
+    assert "sim/run.py" not in done.stderr  # the traceback shows the program's frames only
+    assert not os.path.exists(marker)
+    assert took < 60
+
+
 def test_a_negative_seed_is_a_usage_error_not_a_traceback(tmp_path):
     done, _ = sim_run(write(tmp_path, "ok.py", "print(1)\n"), "--seed", "-3")
     assert done.returncode == 2

@@ -43,8 +43,35 @@ def test_open_and_os_reach_the_flash_not_the_host(hub, tmp_path):
     assert (tmp_path / "flash" / "made.txt").read_text() == "on the hub"
     assert namespace["names"] == ["made.txt"]
     namespace = run(hub, "import uos, sys\nsame = uos is sys.modules.get('os')\nplatform = sys.platform")
-    assert namespace["same"] is False  # the host's os module is untouched
+    assert namespace["same"] is True  # the hub's os, as its sys.modules shows it
+    assert sys.modules["os"].getpid  # the host's os module is untouched
     assert namespace["platform"] == "esp32"
+
+
+def test_imports_reach_only_what_the_esp32_port_has(hub):
+    for name in ("subprocess", "socket", "ctypes", "importlib", "shutil", "openbricks_sim"):
+        with pytest.raises(ImportError, match=f"no module named '{name}'"):
+            run(hub, f"import {name}")
+    namespace = run(hub, "import json, struct, math, utime, ujson\nok = json is ujson")
+    assert namespace["ok"] is True
+
+
+def test_sys_is_micropythons_and_io_open_reaches_only_the_flash(hub):
+    namespace = run(
+        hub,
+        "import sys, io\n"
+        "name = sys.implementation.name\n"
+        "version = sys.implementation.version\n"
+        "hidden = [a for a in ('executable', 'meta_path', '_getframe') if hasattr(sys, a)]\n"
+        "host = [m for m in ('subprocess', 'importlib', 'posixpath', 'openbricks_sim') if m in sys.modules]\n"
+        "try:\n"
+        "    io.open('/../../etc/passwd')\n"
+        "except OSError as exc:\n"
+        "    refused = exc.args[0]\n",
+    )
+    assert namespace["name"] == "micropython" and namespace["version"][:3] == (1, 27, 0)
+    assert namespace["hidden"] == [] and namespace["host"] == []
+    assert namespace["refused"] == 2  # ENOENT: /etc/passwd on the flash, not the host's
 
 
 def test_a_module_on_the_flash_imports_from_the_program_directory_and_lib(hub):
