@@ -76,8 +76,19 @@ def heap_unlock():
     return 0
 
 
+_kbd_intr_handler = [None]
+
+
+def bind_kbd_intr(handler):
+    """Who honours kbd_intr(): a virtual hub's link (None: nothing reads a console, as in a sim run)."""
+    _kbd_intr_handler[0] = handler
+
+
 def kbd_intr(char):
-    pass
+    """micropython.kbd_intr(chr): the byte that interrupts running code, -1 for none (mpremote's
+    mount turns Ctrl-C off while binary data flows)."""
+    if _kbd_intr_handler[0] is not None:
+        _kbd_intr_handler[0](char)
 
 
 class RingIO:

@@ -43,8 +43,9 @@ class _RawOut(io.RawIOBase):
     def writable(self):
         return True
 
-    def write(self, data):
-        data = bytes(data)
+    def write(self, data, n=None):
+        """MicroPython's stream write(buf[, n]): the first n bytes of buf."""
+        data = bytes(data) if n is None else bytes(memoryview(data)[:n])
         self._send(data)
         return len(data)
 
@@ -53,15 +54,31 @@ class ConsoleIn(io.TextIOBase):
     """The running code's stdin. `take(n)` returns up to n waiting bytes (b"" if none); call
     `notify()` whenever new bytes may have arrived or an interrupt is due."""
 
-    def __init__(self, take, interrupted):
+    def __init__(self, take, interrupted, peek=None):
         self._take = take
+        self._peek = peek or (lambda: False)  # are bytes waiting?
         self._interrupted = interrupted  # an Event set while a Ctrl-C is being delivered
         self._ready = threading.Condition()
         self.buffer = _RawIn(self)
 
+    console_input = True  # what the hub's select.poll() waits on
+
     def notify(self):
         with self._ready:
             self._ready.notify_all()
+
+    def wait_readable(self, timeout_s=None):
+        """True once bytes from the host wait to be read (False after timeout_s without any)."""
+        import time
+
+        deadline = None if timeout_s is None else time.monotonic() + timeout_s
+        with self._ready:
+            while not self._peek():
+                remaining = 0.5 if deadline is None else min(0.5, deadline - time.monotonic())
+                if remaining <= 0:
+                    return False
+                self._ready.wait(remaining)
+            return True
 
     def readable(self):
         return True
@@ -107,15 +124,19 @@ class ConsoleIn(io.TextIOBase):
 
 
 class _RawIn(io.RawIOBase):
+    console_input = True
+
     def __init__(self, console):
         self._console = console
 
     def readable(self):
         return True
 
-    def readinto(self, buffer):
-        data = self._console.read_bytes(len(buffer))
-        buffer[: len(data)] = data
+    def readinto(self, buffer, n=None):
+        """MicroPython's readinto(buf[, n]): at most n bytes (at least one, waiting for the host)."""
+        view = memoryview(buffer).cast("B")
+        data = self._console.read_bytes(len(view) if n is None else min(n, len(view)))
+        view[: len(data)] = data
         return len(data)
 
 

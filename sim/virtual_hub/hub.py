@@ -21,6 +21,7 @@ import sys
 import threading
 from dataclasses import dataclass
 
+from ..shim import micropython as shim_micropython
 from . import frozen
 from .console import ConsoleIn, ConsoleOut, make_input
 from .gate import InterruptGate
@@ -87,14 +88,18 @@ class VirtualHub:
         self.world = HubWorld(config.world, config.chassis, config.seed, nvs=self.nvs, epoch_ms=EPOCH_2000_MS)
         self.protocol = ReplProtocol(self._send, paste_window=config.paste_window)
         self.stdout = ConsoleOut(self._send)
-        self.stdin = ConsoleIn(self._take_stdin, self.gate.wakeup)
+        self.stdin = ConsoleIn(self._take_stdin, self.gate.wakeup, peek=lambda: bool(self.protocol.stdin))
         self.gate.add_waiter(self.stdin.notify)
         self.limits = RunLimits(
             self.world.clock, self.gate.interrupt, config.run_sim_limit_ms, config.run_wall_limit_s
         )
         self.pacer = Pacer(self.world.clock, self._speed_now, self.gate.wakeup, self._between_slices)
         self.python = HubPython(
-            self.fs, self.pacer.time_module(), MACHINE, input_fn=make_input(self.stdin, self.stdout)
+            self.fs,
+            self.pacer.time_module(),
+            MACHINE,
+            input_fn=make_input(self.stdin, self.stdout),
+            stdin_ready=self.stdin.wait_readable,
         )
         self.run_active = False
         self.runs_started = 0
@@ -107,6 +112,11 @@ class VirtualHub:
     def _send(self, data):
         with self._send_lock:
             self.port.write(data)
+
+    def _set_interrupt_char(self, char):
+        """micropython.kbd_intr(char) of hub code: the byte the link turns into an interrupt."""
+        with self._state_lock:
+            self.protocol.interrupt_char = char if char >= 0 else -1
 
     def _take_stdin(self, n):
         with self._state_lock:
@@ -151,6 +161,7 @@ class VirtualHub:
         sys.stdout = sys.stderr = self.stdout
         sys.stdin = self.stdin
         self.world.install()
+        shim_micropython.bind_kbd_intr(self._set_interrupt_char)
         self.python.install()
         try:
             self._reset(hard=True)

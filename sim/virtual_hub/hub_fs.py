@@ -50,6 +50,9 @@ class HubFS:
         self._uname = uname or UnameResult("esp32", "esp32", "1.27.0", "openbricks virtual hub", "ESP32S3")
         self._used_estimate = None  # bytes in use, an upper bound between exact recounts
 
+    def __repr__(self):
+        return "<VfsLfs2>"  # how `vfs.mount()` (and so `mpremote df`) names the ESP32 port's flash
+
     # -- paths ---------------------------------------------------------------------------------
 
     def hub_path(self, path):

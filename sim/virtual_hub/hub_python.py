@@ -39,6 +39,7 @@ from collections.abc import MutableMapping
 from ..hub_modules import RUNTIME_PACKAGE, hub_name
 from . import deflate_module
 from .hub_fs import HubFS
+from .hub_vfs import HubVFS
 
 FLASH_PATH_PREFIX = "<hub-flash>:"  # marks a package __path__ entry that lives on the hub's flash
 DEFAULT_SYS_PATH = ("", ".frozen", "/lib")
@@ -153,7 +154,7 @@ class _HubLoader(importlib.abc.Loader):
             self._inner.exec_module(module)
             return
         module.__file__ = self.hub_path
-        with self._hub.fs.open(self.hub_path, "rb") as f:
+        with self._hub.files.open(self.hub_path, "rb") as f:
             source = f.read()
         self._hub.flash_modules.add(module.__name__)
         exec(compile(source, self.hub_path, "exec"), module.__dict__)
@@ -164,7 +165,7 @@ class _HubLoader(importlib.abc.Loader):
     def get_source(self, fullname):
         if self._inner is not None:
             return self._inner.get_source(fullname)
-        with self._hub.fs.open(self.hub_path, "r") as f:
+        with self._hub.files.open(self.hub_path, "r") as f:
             return f.read()
 
 
@@ -236,8 +237,10 @@ class _HubModules(MutableMapping):
 class HubPython:
     """Builtins, module facades and the REPL namespace of one virtual hub."""
 
-    def __init__(self, fs: HubFS, time_module, machine_name, input_fn=None):
+    def __init__(self, fs: HubFS, time_module, machine_name, input_fn=None, stdin_ready=None):
         self.fs = fs
+        self.files = HubVFS(fs)  # the flash at "/" and what hub code mounts beside it
+        self._stdin_ready = stdin_ready  # stdin_ready(timeout_s) -> bool: select.poll on the console
         self.flash_modules = set()  # modules imported from the flash (dropped at a soft reset)
         self._time = time_module
         self._machine_name = machine_name
@@ -264,7 +267,10 @@ class HubPython:
         what the old runtime left running.
         """
         self.fs.cwd = "/"
-        self.os = self.fs.os_module()
+        self.files.reset()
+        self.os = self.files.os_module()
+        self.vfs = self.files.vfs_module()
+        self.select = _make_select(self._stdin_ready)
         self.os.dupterm = _no_dupterm
         self.gc = _make_gc()
         self.io = self._make_io()
@@ -304,7 +310,7 @@ class HubPython:
         module = types.ModuleType("io", "MicroPython's io: streams, and open() on the hub's flash.")
         for name in IO_ATTRIBUTES:
             setattr(module, name, getattr(io, name))
-        module.open = self.fs.open
+        module.open = self.files.open
         return module
 
     def _make_builtins(self):
@@ -312,7 +318,7 @@ class HubPython:
         module.__dict__.update(builtins.__dict__)
         for name in HIDDEN_BUILTINS:
             module.__dict__.pop(name, None)
-        module.open = self.fs.open
+        module.open = self.files.open
         module.__import__ = self._import
         module.help = _help
         if self._input is not None:
@@ -335,6 +341,10 @@ class HubPython:
             return self._time
         if name == "deflate":
             return deflate_module
+        if name == "vfs":
+            return self.vfs
+        if name == "select":
+            return self.select
         if name == "gc":
             return self.gc
         return None
@@ -403,10 +413,7 @@ class HubPython:
         return None
 
     def _is_file(self, hub_path):
-        try:
-            return os.path.isfile(self.fs.host_path(hub_path))
-        except OSError:
-            return False
+        return self.files.is_file(hub_path)
 
     # -- running code --------------------------------------------------------------------------------
 
@@ -450,6 +457,61 @@ def _make_gc():
     module.mem_free = mem_free
     module.threshold = lambda amount=None: -1 if amount is None else None
     return module
+
+
+def _make_select(stdin_ready):
+    """MicroPython's `select` for hub code: poll() over the console's stdin (what mpremote's mount
+    code waits on); other streams count as always ready, as a file on the flash is."""
+    import select as host_select
+
+    module = types.ModuleType("select", "MicroPython's select on the virtual hub.")
+    module.POLLIN, module.POLLOUT = host_select.POLLIN, host_select.POLLOUT
+    module.POLLERR, module.POLLHUP = host_select.POLLERR, host_select.POLLHUP
+
+    class Poll:
+        def __init__(self):
+            self._streams = {}
+
+        def register(self, stream, eventmask=host_select.POLLIN | host_select.POLLOUT):
+            self._streams[id(stream)] = (stream, eventmask)
+
+        def modify(self, stream, eventmask):
+            if id(stream) not in self._streams:
+                raise OSError(2, "ENOENT")
+            self._streams[id(stream)] = (stream, eventmask)
+
+        def unregister(self, stream):
+            self._streams.pop(id(stream), None)
+
+        def poll(self, timeout_ms=-1):
+            return list(self.ipoll(timeout_ms))
+
+        def ipoll(self, timeout_ms=-1, flags=0):
+            timeout_s = None if timeout_ms is None or timeout_ms < 0 else timeout_ms / 1000
+            ready = []
+            waits_on_console = False
+            for stream, mask in self._streams.values():
+                events = mask & host_select.POLLOUT
+                if mask & host_select.POLLIN:
+                    if _is_console_in(stream):
+                        waits_on_console = True
+                        continue
+                    events |= host_select.POLLIN
+                if events:
+                    ready.append((stream, events))
+            if waits_on_console and stdin_ready is not None:
+                console_ready = stdin_ready(0 if ready else timeout_s)
+                for stream, mask in self._streams.values():
+                    if mask & host_select.POLLIN and _is_console_in(stream) and console_ready:
+                        ready.append((stream, host_select.POLLIN))
+            return iter(ready)
+
+    module.poll = Poll
+    return module
+
+
+def _is_console_in(stream):
+    return getattr(stream, "console_input", False)
 
 
 def _no_dupterm(stream=None, index=0):

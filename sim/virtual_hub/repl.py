@@ -109,6 +109,7 @@ class ReplProtocol:
         self._after_cr = False
         self._running = BOOT  # hubs power up running boot.py/main.py
         self.stdin = bytearray()  # bytes received while code runs (its sys.stdin)
+        self.interrupt_char = CTRL_C  # micropython.kbd_intr(): -1 while code reads binary stdin
 
     # -- state ----------------------------------------------------------------------------------
 
@@ -137,7 +138,7 @@ class ReplProtocol:
         self._grant_in_flight = 0
         for byte in data:
             if self._running is not None:
-                if byte == CTRL_C:
+                if byte == self.interrupt_char:
                     events.append(Interrupt())
                 else:
                     self.stdin.append(byte)
@@ -340,6 +341,7 @@ class ReplProtocol:
         if kind is None:
             raise RuntimeError("execution_done() without code running")
         error = cooked(error_text)
+        self.interrupt_char = CTRL_C  # as pyexec re-arms Ctrl-C for the next code
         if kind in (RAW, PASTE):
             self._write(b"\x04" + error + b"\x04>")
         elif kind == BOOT:

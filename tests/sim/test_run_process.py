@@ -10,6 +10,11 @@ import time
 
 import pytest
 
+# Past the hub's Python: the host's os module, reached through object internals.
+HOST_OS = (
+    "[c for c in ().__class__.__base__.__subclasses__() if c.__name__ == '_wrap_close'][0]"
+    ".__init__.__globals__"
+)
 BUSY_LOOP = "print('spinning', end='')\nwhile True:\n    pass\n"
 MEMORY_BOMB = "blocks = []\nwhile True:\n    blocks.append(bytearray(50 * 1024 * 1024))\n"
 STUBBORN_LOOP = """\
@@ -119,9 +124,9 @@ def test_a_busy_loop_that_swallows_interrupts_still_ends(tmp_path):
         ("print(open('../../../etc/passwd').read())\n", "OSError: [Errno 2] ENOENT"),
         ("import os\nos.fork()\n", "AttributeError: module 'os' has no attribute 'fork'"),
         # Past the hub's Python to the host's os module: the kernel still refuses a new process.
-        ("open.__func__.__globals__['os'].fork()\n", "OSError: [Errno 1] Operation not permitted"),
+        (HOST_OS + "['fork']()\n", "OSError: [Errno 1] Operation not permitted"),
         (
-            "open.__func__.__globals__['os'].system('touch /tmp/openbricks-escaped')\n",
+            HOST_OS + "['system']('touch /tmp/openbricks-escaped')\n",
             "",  # os.system's fork fails: it returns -1, nothing ran
         ),
     ],

@@ -100,6 +100,46 @@ def test_mpremote_execs_copies_lists_and_runs_files(hub, tmp_path):
     assert "No such file" in (done.stdout + done.stderr).decode()
 
 
+def test_mpremote_df_lists_the_flash_as_on_a_hub(hub):
+    done = hub.mpremote("df")
+    assert done.returncode == 0, done.stderr
+    header, flash_line = done.stdout.decode().splitlines()
+    assert header.split() == ["filesystem", "size", "used", "avail", "use%", "mounted", "on"]
+    name, size, used, avail, _percent, mount_point = flash_line.split()
+    assert (name, int(size), mount_point) == ("<VfsLfs2>", 2 * 1024 * 1024, "/")
+    assert int(used) + int(avail) == int(size)
+
+
+def test_mpremote_mount_runs_a_program_from_a_host_directory(hub, tmp_path):
+    shared = tmp_path / "shared"
+    shared.mkdir()
+    (shared / "helper.py").write_text("VALUE = 42\n")
+    (shared / "data.txt").write_text("from the host\n")
+    (shared / "mission.py").write_text("import helper\nprint('helper says', helper.VALUE)\n")
+    done = hub.mpremote(
+        "mount",
+        str(shared),
+        "exec",
+        "import os\nprint(os.getcwd(), sorted(os.listdir()))\nprint(open('data.txt').read().strip())\n"
+        "with open('written.txt', 'w') as f:\n    f.write('from the hub')\n",
+    )
+    assert done.returncode == 0, done.stderr
+    lines = done.stdout.decode().splitlines()
+    assert lines[0] == f"Local directory {shared} is mounted at /remote"
+    assert lines[1:] == ["/remote ['data.txt', 'helper.py', 'mission.py']", "from the host"]
+    assert (shared / "written.txt").read_text() == "from the hub"
+    assert not os.path.exists(flash(hub, "written.txt"))  # on the host directory, not the flash
+
+    done = hub.mpremote("mount", str(shared), "run", str(shared / "mission.py"))
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.decode().splitlines()[-1] == "helper says 42"
+
+    # mpremote unmounts when it is done: the hub is back on its flash.
+    done = hub.mpremote("exec", "import os, vfs\nprint(os.getcwd(), len(vfs.mount()))")
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.decode().strip() == "/ 1"
+
+
 def test_mpremote_sees_a_micropython_traceback_for_a_failing_exec(hub):
     done = hub.mpremote("exec", "def f():\n    raise ValueError('bad value')\nf()")
     assert done.returncode == 1
