@@ -107,12 +107,22 @@ def test_ctrl_c_stops_the_program_and_exits_130_with_the_report(tmp_path):
 
 
 @pytest.mark.e2e
-def test_a_busy_loop_that_swallows_interrupts_still_ends(tmp_path):
+def test_a_busy_loop_that_swallows_every_interrupt_is_killed_at_its_cpu_limit(tmp_path):
     program = write(tmp_path, "stubborn.py", STUBBORN_LOOP)
-    done, took = sim_run(program, "--wall-limit", "1", "--cpu-limit", "3")
+    done, took = sim_run(program, "--wall-limit", "0", "--cpu-limit", "2")
     assert done.returncode == 3, done.stderr
-    assert "CPU-time limit" in done.stderr and "--cpu-limit" in done.stderr
-    assert took < 30
+    assert "CPU-time limit: the run's process used its 2 s of processor time (--cpu-limit)" in done.stderr
+    assert "[cpu_limit]" in done.stderr
+    assert took < 60
+
+
+@pytest.mark.e2e
+def test_a_busy_loop_that_swallows_every_interrupt_is_killed_after_its_wall_limit(tmp_path):
+    program = write(tmp_path, "stubborn.py", STUBBORN_LOOP)
+    done, took = sim_run(program, "--wall-limit", "1", "--cpu-limit", "0")
+    assert done.returncode == 3, done.stderr
+    assert "wall-clock limit: the program was still running 1 s (--wall-limit) plus 10 s" in done.stderr
+    assert 11 <= took < 40
 
 
 @pytest.mark.e2e
