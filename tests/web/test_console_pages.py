@@ -1,0 +1,224 @@
+"""The browser console as a person uses it: Debian's Chromium, signed in with the URL `openbricks console`
+printed, against the real daemon with two virtual hubs. Every page is visited and screenshotted (kept in
+build/artifacts/web/); the flows a team at the table relies on are driven through the page itself."""
+
+from __future__ import annotations
+
+import re
+import time
+
+import pytest
+
+from tests.web.conftest import screenshot
+
+pytestmark = pytest.mark.e2e
+
+COUNTING = """from openbricks.tools import wait
+
+for i in range(20):
+    print("count", i)
+    wait(20)
+print("done counting")
+"""
+
+FOREVER = """from openbricks.tools import wait
+
+i = 0
+while True:
+    print("still going", i)
+    i += 1
+    wait(100)
+"""
+
+
+def open_program(page, name: str, source: str) -> None:
+    """Create (or open) a program in the editor and replace its text."""
+    page.goto(page.url.split("#")[0] + "#/editor")
+    existing = page.locator("button.prog", has_text=name)
+    if existing.count():
+        existing.first.click()
+    else:
+        page.fill("input[aria-label='New program name']", name)
+        page.click("form.new button[type=submit]")
+    page.wait_for_selector(".cm-content")
+    page.click(".cm-content")
+    page.keyboard.press("Control+a")
+    page.keyboard.press("Delete")
+    # CodeMirror auto-indents typed newlines: insert the text as one paste instead.
+    page.evaluate(
+        """(text) => {
+            const dt = new DataTransfer();
+            dt.setData('text/plain', text);
+            document.querySelector('.cm-content').dispatchEvent(
+                new ClipboardEvent('paste', {clipboardData: dt, bubbles: true, cancelable: true}));
+        }""",
+        source,
+    )
+
+
+def select_all_hubs(page) -> None:
+    page.click("text=all hubs")
+
+
+def runs(console) -> list[dict]:
+    with console.api() as c:
+        return c.get("/api/runs").json()
+
+
+def wait_for(predicate, timeout_s: float = 30, what: str = "condition"):
+    deadline = time.monotonic() + timeout_s
+    while time.monotonic() < deadline:
+        value = predicate()
+        if value:
+            return value
+        time.sleep(0.2)
+    raise AssertionError(f"timed out waiting for {what}")
+
+
+def pane_text(page, hub_name: str) -> str:
+    return page.locator(f"[data-testid=output-pane][data-hub='{hub_name}'] .xterm-rows").inner_text()
+
+
+def test_a_syntax_error_is_marked_at_its_line_and_nothing_is_sent(console, page_for):
+    page = page_for(console.url)
+    before = runs(console)
+    open_program(page, "broken.py", "print('fine')\nx = (1,\nprint('never')\n")
+    select_all_hubs(page)
+    page.click("[data-testid=run]")
+    problems = page.wait_for_selector("[data-testid=problems]")
+    assert "line 2" in problems.inner_text()
+    # The mark sits on the editor's line 2 itself.
+    marked = page.locator(".cm-line", has=page.locator(".cm-lintRange-error"))
+    assert marked.count() == 1
+    assert marked.inner_text().startswith("x = (1,")
+    screenshot(page, "editor-syntax-error")
+    assert runs(console) == before, "a program with a syntax error reached a hub"
+    with console.api() as c:
+        assert all(h["status"] == "idle" for h in c.get("/api/hubs").json())
+
+
+def test_two_hubs_run_at_once_each_terminal_shows_its_own_output_and_history_keeps_both(console, page_for):
+    page = page_for(console.url)
+    hubs = console.wait_hubs_idle(2)
+    names = sorted(h["name"] for h in hubs)
+    open_program(page, "count.py", COUNTING)
+    select_all_hubs(page)
+    page.click("[data-testid=run]")
+    page.goto(page.url.split("#")[0] + "#/output")
+    for name in names:
+        page.wait_for_function(
+            "(name) => document.querySelector(`[data-testid=output-pane][data-hub='${name}'] .xterm-rows`)"
+            "?.innerText.includes('done counting')",
+            arg=name,
+            timeout=60000,
+        )
+    for name in names:
+        text = pane_text(page, name)
+        counts = [int(n) for n in re.findall(r"count (\d+)", text)]
+        assert counts == list(range(20)), f"{name}: {counts}"
+    screenshot(page, "output-two-hubs")
+
+    finished = wait_for(
+        lambda: [r for r in runs(console) if r["program_name"] == "count.py" and r["outcome"] == "finished"],
+        what="both runs finished in the history",
+    )
+    assert sorted({r["hub_id"] for r in finished}) == sorted(h["hub_id"] for h in hubs)
+
+    page.goto(page.url.split("#")[0] + "#/history")
+    rows = page.locator("[data-testid=run-row]", has_text="count.py")
+    rows.first.wait_for()
+    assert rows.count() >= 2
+    for name in names:
+        assert page.locator("[data-testid=run-row]", has_text=name).count() >= 1
+    rows.first.click()
+    output = page.wait_for_selector("[data-testid=run-output]")
+    page.wait_for_function(
+        "() => document.querySelector('[data-testid=run-output]').innerText.includes('done counting')"
+    )
+    assert "count 19" in output.inner_text()
+    screenshot(page, "history-run")
+
+    page.goto(page.url.split("#")[0] + "#/dashboard")
+    for name in names:
+        tile = page.locator(f"[data-testid=hub-tile][data-hub='{name}']")
+        tile.locator("[data-testid=last-outcome]", has_text="finished").wait_for()
+    screenshot(page, "dashboard")
+
+
+def test_stop_all_from_the_keyboard_stops_every_hub(console, page_for):
+    page = page_for(console.url)
+    hubs = console.wait_hubs_idle(2)
+    open_program(page, "forever.py", FOREVER)
+    select_all_hubs(page)
+    page.click("[data-testid=run]")
+    page.goto(page.url.split("#")[0] + "#/dashboard")
+    for h in hubs:
+        page.locator(
+            f"[data-testid=hub-tile][data-hub='{h['name']}'] [data-testid=hub-status]", has_text="running"
+        ).wait_for()
+    page.locator("[data-testid=run-timer]").first.wait_for()
+    screenshot(page, "dashboard-running")
+    page.keyboard.press("Escape")
+    for h in hubs:
+        tile = page.locator(f"[data-testid=hub-tile][data-hub='{h['name']}']")
+        tile.locator("[data-testid=hub-status]", has_text="idle").wait_for(timeout=15000)
+        tile.locator("[data-testid=last-outcome]", has_text="stopped").wait_for()
+    stopped = [r for r in runs(console) if r["program_name"] == "forever.py"]
+    assert len(stopped) == 2 and all(r["outcome"] == "stopped" for r in stopped), stopped
+
+
+def test_a_viewer_sees_everything_and_can_change_nothing(console, page_for):
+    token = console.mint("viewer")
+    page = page_for(console.sign_in_url(token))
+    page.locator(".role", has_text="viewer").wait_for()
+    assert page.is_disabled("[data-testid=stop-all]")
+    page.locator("[data-testid=readonly-reason]").wait_for()
+    assert "Viewer role" in page.inner_text("[data-testid=readonly-reason]")
+    tiles = page.locator("[data-testid=hub-tile]")
+    tiles.first.wait_for()
+    for button in tiles.locator("footer button").all():
+        assert button.is_disabled(), button.inner_text()
+        assert "Viewer role" in (button.get_attribute("title") or "")
+    screenshot(page, "dashboard-viewer")
+
+    before = runs(console)
+    page.keyboard.press("Escape")  # STOP ALL's key: refused with the reason, nothing sent
+    page.locator(".notice", has_text="Viewer role").first.wait_for()
+
+    page.goto(page.url.split("#")[0] + "#/editor")
+    page.locator("button.prog").first.wait_for()
+    page.locator("button.prog").first.click()
+    for label in ("Save", "Upload", "Run ▶", "Stop"):
+        assert page.get_by_role("button", name=label, exact=True).is_disabled(), label
+    assert page.is_disabled("input[aria-label='New program name']")
+    screenshot(page, "editor-viewer")
+    assert runs(console) == before
+    # History and output stay readable.
+    page.goto(page.url.split("#")[0] + "#/history")
+    page.locator("[data-testid=run-row]").first.wait_for()
+
+
+@pytest.mark.parametrize(
+    ("page_id", "expect"),
+    [
+        ("dashboard", "Dashboard"),
+        ("editor", "Programs"),
+        ("output", "Output"),
+        ("history", "History"),
+        ("telemetry", "Telemetry"),
+        ("sim", "Simulator"),
+        ("flash", "Flash"),
+        ("servo", "Servo-ID"),
+        ("audit", "Audit"),
+    ],
+)
+@pytest.mark.parametrize(("width", "height"), [(1280, 800), (820, 1180)], ids=["laptop", "tablet"])
+def test_every_page_renders_with_content(console, page_for, page_id, expect, width, height):
+    page = page_for(console.sign_in_url(console.token, page_id), width, height)
+    page.locator("main h1, main h3").filter(has_text=expect).first.wait_for()
+    page.wait_for_timeout(300)
+    # Nothing wider than the window: the page works at this width without sideways scrolling.
+    overflow = page.evaluate("() => document.documentElement.scrollWidth - window.innerWidth")
+    assert overflow <= 1, f"{page_id} at {width}px is {overflow}px too wide"
+    screenshot(page, f"{page_id}-{width}x{height}")
+    assert page.errors == [], page.errors
