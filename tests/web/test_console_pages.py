@@ -21,6 +21,15 @@ for i in range(20):
 print("done counting")
 """
 
+LONG_LINES = 150
+LONG_COUNT = f"""from openbricks.tools import wait
+
+for i in range({LONG_LINES}):
+    print("long", i)
+    wait(20)
+print("long done")
+"""
+
 FOREVER = """from openbricks.tools import wait
 
 i = 0
@@ -29,6 +38,15 @@ while True:
     i += 1
     wait(100)
 """
+
+
+RECORD_SOCKETS = """(() => {
+    const Native = window.WebSocket;
+    window.__sockets = [];
+    window.WebSocket = class extends Native {
+        constructor(...args) { super(...args); window.__sockets.push(this); }
+    };
+})()"""
 
 
 def open_program(page, name: str, source: str) -> None:
@@ -77,6 +95,15 @@ def wait_for(predicate, timeout_s: float = 30, what: str = "condition"):
 
 def pane_text(page, hub_name: str) -> str:
     return page.locator(f"[data-testid=output-pane][data-hub='{hub_name}'] .xterm-rows").inner_text()
+
+
+def downloaded_output(page, hub_name: str) -> str:
+    """What a terminal holds, all of it, through its Download button (the screen shows only the tail)."""
+    with page.expect_download() as download:
+        page.locator(f"[data-testid=output-pane][data-hub='{hub_name}']").get_by_role(
+            "button", name="Download"
+        ).click()
+    return open(download.value.path()).read()
 
 
 def test_a_syntax_error_is_marked_at_its_line_and_nothing_is_sent(console, page_for):
@@ -222,3 +249,41 @@ def test_every_page_renders_with_content(console, page_for, page_id, expect, wid
     assert overflow <= 1, f"{page_id} at {width}px is {overflow}px too wide"
     screenshot(page, f"{page_id}-{width}x{height}")
     assert page.errors == [], page.errors
+
+
+def test_a_dropped_event_stream_resumes_without_losing_or_repeating_a_line(console, browser, page_for):
+    hubs = console.wait_hubs_idle(2)
+    name = hubs[0]["name"]
+    context = browser.new_context(viewport={"width": 1280, "height": 800})
+    try:
+        context.add_init_script(RECORD_SOCKETS)
+        page = context.new_page()
+        page.goto(console.url)
+        page.wait_for_selector("[data-testid=stop-all]")
+        open_program(page, "long_count.py", LONG_COUNT)
+        page.click("[data-testid=run]")  # no hub selected: the editor says so and sends nothing
+        page.locator(".notice", has_text="Pick at least one hub").wait_for()
+        page.locator("label.target", has_text=name).locator("input").check()
+        page.click("[data-testid=run]")
+        page.goto(page.url.split("#")[0] + "#/output")
+        last_count = (
+            "([name, n]) => Math.max(-1, ...[...(document.querySelector("
+            "`[data-testid=output-pane][data-hub='${name}'] .xterm-rows`)?.innerText ?? '')"
+            ".matchAll(/long (\\d+)/g)].map((m) => +m[1])) >= n"
+        )
+        for cut in range(3):  # the stream drops three times while the hub prints
+            page.wait_for_function(last_count, arg=[name, 30 * (cut + 1)])
+            page.evaluate("() => window.__sockets.at(-1).close()")
+            page.wait_for_timeout(300)
+        page.wait_for_function(
+            "(name) => document.querySelector(`[data-testid=output-pane][data-hub='${name}'] .xterm-rows`)"
+            "?.innerText.includes('long done')",
+            arg=name,
+            timeout=60000,
+        )
+        assert page.evaluate("() => window.__sockets.length") >= 4
+        text = downloaded_output(page, name)
+        counts = [int(n) for n in re.findall(r"long (\d+)", text)]
+        assert counts == list(range(LONG_LINES)), "lines lost or repeated across reconnects"
+    finally:
+        context.close()
