@@ -17,6 +17,7 @@ const hub = (id: string, extra: Partial<Hub> = {}): Hub => ({
   run_id: null,
   run_started_ms: null,
   holder: null,
+  last_error: null,
   ...extra,
 });
 

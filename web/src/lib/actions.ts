@@ -26,8 +26,7 @@ export interface StopAllResult {
 export async function stopAll(): Promise<void> {
   if (refusedFor("mutate")) return;
   try {
-    const r = await api.post<StopAllResult[] | { results: StopAllResult[] }>("/api/hubs/stop-all");
-    const results = Array.isArray(r) ? r : r.results;
+    const results = (await api.post<{ hubs: StopAllResult[] }>("/api/hubs/stop-all")).hubs;
     const stopped = results.filter((x) => x.stopped).map((x) => x.name);
     const idle = results.filter((x) => !x.stopped && x.detail === "nothing was running").map((x) => x.name);
     const failed = results.filter((x) => !x.stopped && x.detail !== "nothing was running");
@@ -60,8 +59,20 @@ export async function hubAction(hubId: string, action: "identify" | "connect" | 
   }
 }
 
-/** What to run: a stored program by name (the daemon records the exact version) or the staged one. */
-export type RunRequest = { program: string } | { staged: true };
+/** What to run: a stored program by name (the daemon records the exact version it ran). */
+export interface RunRequest {
+  program: string;
+}
+
+/**
+ * What a hub's own Run button runs: the stored program of the name staged on it, or null with the reason.
+ * (The daemon runs programs it is sent; a program staged by another tool has no stored copy to send.)
+ */
+export function rerunnable(hub: Hub, stored: Set<string> | null): { program: string } | { reason: string } {
+  if (!hub.staged_program) return { reason: "Nothing staged: run a program on it from the editor first." };
+  if (stored && !stored.has(hub.staged_program)) return { reason: `${hub.staged_program} is not stored in the console: open it in the editor.` };
+  return { program: hub.staged_program };
+}
 
 /**
  * Run (or upload) on several hubs at once, each its own request so one busy hub does not hold back the
@@ -69,8 +80,7 @@ export type RunRequest = { program: string } | { staged: true };
  */
 export async function runOn(hubIds: string[], what: RunRequest, mode: "run" | "upload" = "run"): Promise<string[]> {
   if (refusedFor("upload")) return [];
-  const body = "program" in what ? { program: what.program } : {};
-  const results = await Promise.allSettled(hubIds.map((id) => api.post(`/api/hubs/${enc(id)}/${mode}`, body)));
+  const results = await Promise.allSettled(hubIds.map((id) => api.post(`/api/hubs/${enc(id)}/${mode}`, { program: what.program })));
   const ok: string[] = [];
   results.forEach((r, i) => {
     if (r.status === "fulfilled") ok.push(hubIds[i]);
@@ -78,6 +88,17 @@ export async function runOn(hubIds: string[], what: RunRequest, mode: "run" | "u
   });
   if (ok.length && mode === "upload") model.notify("info", `Uploaded to ${ok.map(hubName).join(", ")}.`);
   return ok;
+}
+
+/** Each hub's Run button (and F5 on the dashboard): run the stored program staged on it. */
+export async function runStaged(hubIds: string[]): Promise<void> {
+  for (const id of hubIds) {
+    const hub = model.hubs[id];
+    if (!hub) continue;
+    const what = rerunnable(hub, model.programNames);
+    if ("reason" in what) model.notify("warn", `${hub.name}: ${what.reason}`);
+    else void runOn([id], what);
+  }
 }
 
 export function hubName(hubId: string): string {

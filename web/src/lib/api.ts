@@ -21,8 +21,9 @@ export interface Hub {
   staged_program: string | null;
   run_id: string | null;
   run_started_ms: number | null;
-  holder: { operation: string; who: string | null; since_ms: number } | null;
-  last_outcome?: RunOutcome | null;
+  holder: { operation: string; who: string; since_ms: number } | null;
+  /** why the last connect or operation failed, until the next one succeeds */
+  last_error: string | null;
 }
 
 export interface Program {

@@ -51,6 +51,10 @@ export class ConsoleModel {
   runs = $state<Record<string, RunInfo>>({});
   lastOutcome = $state<Record<string, RunOutcome>>({});
   jobs = $state<Record<string, Job>>({});
+  /** Names of the programs the daemon stores (null until loaded). */
+  programNames = $state<Set<string> | null>(null);
+  /** The Bluetooth scan's state as the daemon reports it (scanning, unavailable and why, off). */
+  ble = $state<string | null>(null);
   /** Bumped whenever a refetch reloaded the state, so pages showing stored data reload too. */
   generation = $state(0);
   competition = $state({ on: false, matchSeconds: 150, matchStartedMs: null as number | null });
@@ -130,11 +134,29 @@ export class ConsoleModel {
   /** Reload everything the stream may have missed. */
   async refetch(r?: Refetch): Promise<void> {
     if (r && !r.quiet) this.notify("warn", r.message);
-    const [me, hubs] = await Promise.allSettled([api.get<Me>("/api/auth/me"), api.get<Hub[]>("/api/hubs")]);
+    const [me, hubs] = await Promise.allSettled([
+      api.get<Me>("/api/auth/me"),
+      api.get<{ hubs: Hub[]; ble: string }>("/api/hubs"),
+    ]);
     if (me.status === "fulfilled") this.me = me.value;
     else this.fail(me.reason, "Signing in");
-    if (hubs.status === "fulfilled") this.setHubs(hubs.value);
-    else this.fail(hubs.reason, "Loading the hubs");
+    if (hubs.status === "fulfilled") {
+      this.setHubs(hubs.value.hubs);
+      this.ble = hubs.value.ble;
+    } else this.fail(hubs.reason, "Loading the hubs");
+    try {
+      const [programs, recent] = await Promise.all([
+        api.get<{ name: string }[]>("/api/programs"),
+        api.get<{ hub_id: string; outcome: RunOutcome | null }[]>("/api/runs?limit=200"),
+      ]);
+      this.programNames = new Set(programs.map((p) => p.name));
+      // Each hub's last outcome: runs come newest first.
+      const last: Record<string, RunOutcome> = {};
+      for (const r of recent) if (r.outcome && !(r.hub_id in last)) last[r.hub_id] = r.outcome;
+      this.lastOutcome = { ...last, ...this.lastOutcome };
+    } catch (err) {
+      this.fail(err, "Loading programs and recent runs");
+    }
     if (this.apiPaths === null) {
       try {
         const schema = await api.get<{ paths: Record<string, unknown> }>("/openapi.json");
@@ -214,6 +236,16 @@ export class ConsoleModel {
           this.lastOutcome[hubId] = outcome;
           const detail = d.detail ? `: ${d.detail as string}` : "";
           this.output(hubId).note(`■ ${outcome}${detail}`, run, outcome === "error" || outcome === "dropped" ? "error" : "note");
+        }
+        break;
+      }
+      case "program": {
+        const name = d.name as string | undefined;
+        if (name && this.programNames) {
+          const next = new Set(this.programNames);
+          if (d.action === "deleted") next.delete(name);
+          else next.add(name);
+          this.programNames = next;
         }
         break;
       }
