@@ -8,6 +8,7 @@ exactly as a person would. Screenshots land in build/artifacts/web/ (kept after 
 from __future__ import annotations
 
 import io
+import re
 from pathlib import Path
 
 import numpy as np
@@ -44,8 +45,9 @@ def browser():
 
 
 @pytest.fixture
-def page_for(browser):
-    """`page_for(url, width, height)`: a fresh signed-in browser context per call, closed after the test."""
+def page_for(browser, request):
+    """`page_for(url, width, height)`: a fresh signed-in browser context per call, closed after the test
+    (each page's last state is kept as `<test>-last-N.png` beside the screenshots, to see a failure)."""
     contexts = []
 
     def open_page(url: str, width: int = 1280, height: int = 800):
@@ -61,7 +63,11 @@ def page_for(browser):
         return page
 
     yield open_page
-    for c in contexts:
+    ARTIFACTS.mkdir(parents=True, exist_ok=True)
+    name = re.sub(r"[^A-Za-z0-9_.-]+", "-", request.node.name)
+    for i, c in enumerate(contexts):
+        for page in c.pages:
+            page.screenshot(path=str(ARTIFACTS / f"{name}-last-{i}.png"))
         c.close()
 
 

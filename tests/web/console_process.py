@@ -60,7 +60,7 @@ class Console:
         hubs: list[dict] = []
         with self.api() as c:
             while time.monotonic() < deadline:
-                hubs = c.get("/api/hubs").json()
+                hubs = c.get("/api/hubs").json()["hubs"]
                 if sum(h["status"] == "idle" for h in hubs) >= count:
                     return hubs
                 time.sleep(0.3)
