@@ -47,7 +47,7 @@ def browser():
 @pytest.fixture
 def page_for(browser, request):
     """`page_for(url, width, height)`: a fresh signed-in browser context per call, closed after the test
-    (each page's last state is kept as `<test>-last-N.png` beside the screenshots, to see a failure)."""
+    (when the test fails, each page's last state is kept as `failed-<test>-N.png` beside the screenshots)."""
     contexts = []
 
     def open_page(url: str, width: int = 1280, height: int = 800):
@@ -63,12 +63,24 @@ def page_for(browser, request):
         return page
 
     yield open_page
-    ARTIFACTS.mkdir(parents=True, exist_ok=True)
-    name = re.sub(r"[^A-Za-z0-9_.-]+", "-", request.node.name)
-    for i, c in enumerate(contexts):
-        for page in c.pages:
-            page.screenshot(path=str(ARTIFACTS / f"{name}-last-{i}.png"))
+    report = getattr(request.node, "call_report", None)
+    if report is not None and report.failed:
+        ARTIFACTS.mkdir(parents=True, exist_ok=True)
+        name = re.sub(r"[^A-Za-z0-9_.-]+", "-", request.node.name)
+        for i, c in enumerate(contexts):
+            for page in c.pages:
+                page.screenshot(path=str(ARTIFACTS / f"failed-{name}-{i}.png"))
+    for c in contexts:
         c.close()
+
+
+@pytest.hookimpl(wrapper=True)
+def pytest_runtest_makereport(item, call):
+    """Keep the test's outcome on the item, so a page fixture can screenshot what a failed test saw."""
+    report = yield
+    if report.when == "call":
+        item.call_report = report
+    return report
 
 
 def screenshot(page, name: str) -> Path:
