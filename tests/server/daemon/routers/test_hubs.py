@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 import time
+from pathlib import Path
 
 import pytest
 
@@ -125,3 +126,28 @@ def test_bad_input_is_refused_with_the_error_shape_before_any_hub_is_touched(dae
         assert both.status_code == 422
         traversal = api.post("/api/hubs/SimHub-1/run", json={"program": "../etc/passwd"})
         assert traversal.status_code in (404, 422) and "error" in traversal.json()
+
+
+def test_a_stored_program_runs_by_name_and_a_button_run_reaches_the_history(daemon2, tmp_path):
+    from openbricks_server.link.discovery import control
+
+    with daemon2.client() as api:
+        wait_idle(api, ["SimHub-1"])
+        saved = api.put("/api/programs/square.py", json={"source": "print('stored one')\n"})
+        assert saved.status_code in (200, 201), saved.text
+        run_id = api.post("/api/hubs/SimHub-1/run", json={"program": "square.py"}).json()["run_id"]
+        detail = wait_ended(api, run_id)
+        assert detail["program_name"] == "square.py" and detail["source"] == "print('stored one')\n"
+        wait_idle(api, ["SimHub-1"])
+        record = json.loads((tmp_path / "data" / "virtual-hubs" / "SimHub-1" / "endpoint.json").read_text())
+        control(Path(record["control"]), {"op": "click"})  # the staged program, started by hand
+        deadline = time.monotonic() + 30
+        while time.monotonic() < deadline:
+            by_hand = [r for r in api.get("/api/runs").json() if r["origin"] == "button"]
+            if by_hand and by_hand[0]["outcome"]:
+                break
+            time.sleep(0.2)
+        (run,) = by_hand
+        assert run["outcome"] == "finished" and run["program_name"] == "square.py"
+        lines = api.get(f"/api/runs/{run['run_id']}/output").json()["lines"]
+        assert [ln["text"] for ln in lines] == ["stored one"]
