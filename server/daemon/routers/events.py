@@ -54,6 +54,15 @@ async def _ping(websocket: WebSocket, caller: Caller, message: dict) -> dict:
     return {"seq": websocket.app.state.ctx.events.seq}
 
 
+@ws_command("stop_all", mutating=True)
+async def _stop_all(websocket: WebSocket, caller: Caller, message: dict) -> dict:
+    """STOP ALL from an open page without a round of HTTP: every connected hub, one report per hub."""
+    hubs = websocket.app.state.ctx.hubs
+    if hubs is None:
+        raise ApiError(503, "hubs_unavailable", "the hub manager is not running", "restart the console")
+    return {"hubs": await hubs.stop_all(caller.label)}
+
+
 @router.websocket("/events")
 async def events(
     websocket: WebSocket,

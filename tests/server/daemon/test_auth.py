@@ -133,6 +133,7 @@ def test_the_viewer_is_refused_with_a_reason_on_every_mutating_route(daemon, vie
 
 def test_the_viewer_is_refused_every_mutating_websocket_command(daemon, viewer_token):
     mutating = [name for name, command in COMMANDS.items() if command.mutating]
+    assert "stop_all" in mutating
     with daemon.websocket(token=viewer_token) as ws:
         json.loads(ws.recv(timeout=5))
         for name in mutating:
@@ -144,12 +145,18 @@ def test_the_viewer_is_refused_every_mutating_websocket_command(daemon, viewer_t
 
 
 def test_every_mutating_call_is_audited_with_who_role_what_and_result(daemon, operator):
+    with daemon.websocket() as ws:
+        json.loads(ws.recv(timeout=5))
+        ws.send(json.dumps({"cmd": "stop_all", "id": 1}))
+        reply = json.loads(ws.recv(timeout=30))
+    assert reply["data"] == {"id": 1, "cmd": "stop_all", "ok": True, "result": {"hubs": []}}
     operator.put("/api/programs/a.py", json={"source": "print(1)\n"})
     operator.put("/api/programs/a.py", json={"source": "if x\n"})
     operator.delete("/api/programs/missing.py")
     operator.get("/api/programs")  # reads are not audited
     entries = operator.get("/api/system/audit").json()
     assert [(e["who"], e["role"], e["action"], e["status"]) for e in reversed(entries)] == [
+        ("local", "operator", "WS stop_all", 200),
         ("local", "operator", "PUT /api/programs/a.py", 200),
         ("local", "operator", "PUT /api/programs/a.py", 422),
         ("local", "operator", "DELETE /api/programs/missing.py", 404),
@@ -188,3 +195,17 @@ def test_a_network_bind_refuses_to_start_until_a_token_exists(tmp_path):
     minted = _console(tmp_path, "token", "--role", "viewer", "--data-dir", data)
     assert minted.returncode == 0, minted.stderr
     assert "viewer token 'viewer-1'" in minted.stdout
+
+
+def test_a_websocket_upgrade_for_another_host_name_is_refused(daemon):
+    import socket
+
+    request = (
+        "GET /api/events HTTP/1.1\r\nHost: evil.example:80\r\nUpgrade: websocket\r\nConnection: Upgrade\r\n"
+        "Sec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==\r\nSec-WebSocket-Version: 13\r\n"
+        f"Origin: http://evil.example\r\nAuthorization: Bearer {daemon.token}\r\n\r\n"
+    )
+    with socket.create_connection(("127.0.0.1", daemon.config.port), timeout=10) as sock:
+        sock.sendall(request.encode())
+        answer = sock.recv(4096).decode("latin-1")
+    assert answer.startswith("HTTP/1.1 403") and "host_not_allowed" in answer

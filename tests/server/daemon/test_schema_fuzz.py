@@ -16,7 +16,7 @@ from openbricks_server.daemon.hub_events import OutputLine, RunStart
 
 from .conftest import start_daemon
 
-EXAMPLES_PER_OPERATION = 5  # per operation and mode (valid input, invalid input)
+EXAMPLES_PER_OPERATION = 4  # per operation and mode (valid input, invalid input)
 
 
 @pytest.fixture(scope="module")
