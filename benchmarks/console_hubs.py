@@ -7,8 +7,9 @@ what the daemon costs at idle.
    connect) and the event its daemon receive time: hub print -> client and daemon -> client
    percentiles over every line every client got, and the lines any client missed (target: p99 < 50 ms,
    0 lost). A virtual hub's clock is simulated time paced to real time: on a starved CPU it falls
-   behind the wall clock, which shows up as hub -> client latency. The 20 clients share this one
-   process, so on a small machine they compete with the daemon and the hubs for the same cores.
+   behind the wall clock, which shows up as hub -> client latency. The clients run in
+   CLIENT_PROCESSES processes; on a small machine they compete with the daemon and the hubs for the
+   same cores.
 2. Uploads: 1, 2, 4 and 8 BLE hubs on the emulated radio (tests/server/link/fake_ble_backend.py,
    bleak's real client; a real virtual hub process behind each peripheral), a 16 KB program uploaded
    to all of them at once through their hub actors (take the hub from its launcher, stage, verify,
@@ -40,6 +41,7 @@ if str(REPO) not in sys.path:
 
 HUBS = 10
 CLIENTS = 20
+CLIENT_PROCESSES = 4
 LINES_PER_S = 100
 DURATION_S = 10
 UPLOAD_HUBS = (1, 2, 4, 8)
@@ -123,15 +125,14 @@ class ConsoleProcess:
 # -- 1. latency and loss --------------------------------------------------------------------------
 
 
-async def _client(console: ConsoleProcess, runs: set, until: asyncio.Event, out: dict) -> None:
+async def _client(url: str, headers: dict, lines: int, hubs: int, ready, out: dict) -> None:
     from websockets.asyncio.client import connect
 
-    url = console.url.replace("http://", "ws://") + "/api/events"
-    hub_lat, daemon_lat = out["hub"], out["daemon"]
-    seen = out["seen"]
-    async with connect(url, additional_headers=console.headers, max_size=None) as ws:
-        out["ready"].set()
-        while not until.is_set():
+    deadline = time.monotonic() + DURATION_S * 6 + 60
+    hub_lat, daemon_lat, seen = out["hub"], out["daemon"], out["seen"]
+    async with connect(url, additional_headers=headers, max_size=None) as ws:
+        ready()
+        while time.monotonic() < deadline:
             try:
                 raw = await asyncio.wait_for(ws.recv(), 1.0)
             except TimeoutError:
@@ -142,15 +143,42 @@ async def _client(console: ConsoleProcess, runs: set, until: asyncio.Event, out:
                 out["resyncs"] += 1
             if event.get("type") != "output" or event["data"].get("from_run_log"):
                 continue
-            run = event["run"]
+            numbers = seen.setdefault(event["run"], set())
             for line in event["data"]["lines"]:
                 parts = line["text"].split()
                 if len(parts) == 3 and parts[0] == "L":
-                    seen.setdefault(run, set()).add(int(parts[1]))
+                    numbers.add(int(parts[1]))
                     hub_lat.append(now - int(parts[2]))
                     daemon_lat.append(now - line["recv_ms"])
-            if runs and all(len(seen.get(r, ())) >= out["expected"] for r in runs) and out["started"]:
+            if sum(len(numbers) >= lines for numbers in seen.values()) >= hubs:
                 return
+
+
+def _client_group(url: str, headers: dict, count: int, lines: int, hubs: int, ready, conn) -> None:
+    """`count` WebSocket clients in one process (several processes: the clients do not share a GIL)."""
+
+    async def main():
+        outs = [{"hub": [], "daemon": [], "seen": {}, "resyncs": 0} for _ in range(count)]
+        connected = []
+
+        def one_ready():
+            connected.append(1)
+            if len(connected) == count:
+                ready.set()
+
+        await asyncio.gather(*(_client(url, headers, lines, hubs, one_ready, out) for out in outs))
+        return outs
+
+    outs = asyncio.run(main())
+    conn.send(
+        {
+            "hub": [v for out in outs for v in out["hub"]],
+            "daemon": [v for out in outs for v in out["daemon"]],
+            "got": sum(min(len(n), lines) for out in outs for n in out["seen"].values()),
+            "resyncs": sum(out["resyncs"] for out in outs),
+        }
+    )
+    conn.close()
 
 
 def _percentile(values: list[float], q: float) -> float:
@@ -158,43 +186,40 @@ def _percentile(values: list[float], q: float) -> float:
     return values[min(len(values) - 1, int(q * len(values)))]
 
 
-async def _latency(console: ConsoleProcess) -> dict:
+def _latency(console: ConsoleProcess) -> dict:
+    import multiprocessing
+
     lines = LINES_PER_S * DURATION_S
     program = PRINTER.format(lines=lines, period_ms=1000 // LINES_PER_S)
-    runs: set = set()
-    until = asyncio.Event()
-    results = [
-        {"hub": [], "daemon": [], "seen": {}, "ready": asyncio.Event(), "expected": lines, "started": False}
-        | {"resyncs": 0}
-        for _ in range(CLIENTS)
-    ]
-    tasks = [asyncio.create_task(_client(console, runs, until, out)) for out in results]
-    await asyncio.gather(*(out["ready"].wait() for out in results))
     hubs = console.get("/api/hubs")["hubs"]
-    started = await asyncio.gather(
-        *(
-            asyncio.to_thread(console.post, f"/api/hubs/{hub['hub_id']}/run", {"source": program})
-            for hub in hubs
+    url = console.url.replace("http://", "ws://") + "/api/events"
+    context = multiprocessing.get_context("spawn")
+    groups = []
+    for _ in range(CLIENT_PROCESSES):
+        ready = context.Event()
+        receive, send = context.Pipe(duplex=False)
+        count = CLIENTS // CLIENT_PROCESSES
+        process = context.Process(
+            target=_client_group, args=(url, console.headers, count, lines, len(hubs), ready, send)
         )
-    )
-    runs.update(s["run_id"] for s in started)
-    for out in results:
-        out["started"] = True
-    try:
-        await asyncio.wait_for(asyncio.gather(*tasks), DURATION_S * 6 + 60)
-    except TimeoutError:
-        pass
-    until.set()
-    await asyncio.gather(*tasks, return_exceptions=True)
-    expected = lines * len(runs) * CLIENTS
-    got = sum(len(out["seen"].get(r, ())) for out in results for r in runs)
+        process.start()
+        groups.append((process, ready, receive))
+    for _process, ready, _receive in groups:
+        if not ready.wait(120):
+            raise RuntimeError("the WebSocket clients did not connect")
+    for hub in hubs:
+        console.post(f"/api/hubs/{hub['hub_id']}/run", {"source": program})
+    results = []
+    for process, _ready, receive in groups:
+        results.append(receive.recv())
+        process.join(30)
     return {
-        "hub": [v for out in results for v in out["hub"]],
-        "daemon": [v for out in results for v in out["daemon"]],
-        "lost": expected - got,
-        "expected": expected,
-        "resyncs": sum(out["resyncs"] for out in results),
-        "hubs": len(runs),
+        "hub": [v for r in results for v in r["hub"]],
+        "daemon": [v for r in results for v in r["daemon"]],
+        "lost": lines * len(hubs) * CLIENTS - sum(r["got"] for r in results),
+        "expected": lines * len(hubs) * CLIENTS,
+        "resyncs": sum(r["resyncs"] for r in results),
+        "hubs": len(hubs),
     }
 
 
@@ -202,7 +227,7 @@ def latency_rows() -> list[Row]:
     console = ConsoleProcess(HUBS)
     try:
         cpu_before, wall_before = _proc_stat(console.process.pid)[0], time.monotonic()
-        figures = asyncio.run(_latency(console))
+        figures = _latency(console)
         daemon_cpu = (_proc_stat(console.process.pid)[0] - cpu_before) / (time.monotonic() - wall_before)
     finally:
         console.stop()
@@ -273,8 +298,8 @@ async def _uploads(count: int, source: str) -> list[float]:
         ble_scanner_backend=radio.scanner_backend,
     )
     manager.scan_s, manager.scan_pause_s = 0.5, 3600
-    program = compile_program(Program("mission.py", source))
     try:
+        program = compile_program(Program("mission.py", source))
         await manager.start()
         async with asyncio.timeout(30):
             while len(manager.list()) < count:

@@ -223,18 +223,20 @@ class HubActor:
         if self._holder is not None and self.connected:
             with contextlib.suppress(LinkError, HubOperationError):
                 await self.stop("daemon shutdown")
-        if self._task is not None:
-            self._jobs.put_nowait(_DISCONNECT)
-            self._wake.set()
-            try:
-                async with asyncio.timeout(HAND_BACK_TIMEOUT_S + 2):
-                    await asyncio.shield(self._task)
-            except (TimeoutError, asyncio.CancelledError):
-                self._task.cancel()
-                await asyncio.gather(self._task, return_exceptions=True)
-        await self._close_link()
-        await self.backend.close()
-        self._set_status("offline")
+        try:
+            if self._task is not None:
+                self._jobs.put_nowait(_DISCONNECT)
+                self._wake.set()
+                try:
+                    async with asyncio.timeout(HAND_BACK_TIMEOUT_S + 2):
+                        await asyncio.shield(self._task)
+                except (TimeoutError, asyncio.CancelledError):
+                    self._task.cancel()
+                    await asyncio.gather(self._task, return_exceptions=True)
+            await self._close_link()
+        finally:
+            await self.backend.close()  # a virtual hub's process ends with the daemon, whatever happened
+            self._set_status("offline")
 
     def rename(self, name: str) -> None:
         """The hub advertises another name now (a BLE rescan): same id, new name."""
@@ -341,7 +343,7 @@ class HubActor:
                 continue
             try:
                 await self._open()
-            except (LinkError, OSError, CliError) as exc:
+            except (LinkError, OSError, CliError, HubOperationError) as exc:
                 self.last_error = str(exc)
                 await self._close_link()
                 self._set_status("offline")
@@ -358,6 +360,9 @@ class HubActor:
                 self.last_error = str(exc)
                 if self._button_run is not None:
                     self._button_run.dropped(str(exc))
+            except Exception as exc:  # noqa: BLE001 - a bug must cost one connection, not the hub
+                log.exception("hub %s: unexpected error; reconnecting", self.name)
+                self.last_error = f"{type(exc).__name__}: {exc}"
             await self._close_link()
             if self._want.is_set() and not self._closing:
                 self._set_status("connecting")
