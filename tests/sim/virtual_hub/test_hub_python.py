@@ -163,3 +163,65 @@ def test_nvs_commits_survive_a_new_process(tmp_path):
 def test_gc_reports_memory_as_micropython_does(hub):
     namespace = run(hub, "import gc\ngc.collect()\nfree = gc.mem_free()\nused = gc.mem_alloc()")
     assert namespace["free"] > 0 and 10_000_000 < namespace["used"] < 2_000_000_000
+
+
+MEMORY_VFS = """\
+import io, os, vfs
+
+class MemoryVFS:
+    def __init__(self, files):
+        self.files = files
+        self.calls = []
+    def mount(self, readonly, mkfs):
+        self.calls.append(('mount', readonly))
+    def umount(self):
+        self.calls.append(('umount',))
+    def chdir(self, path):
+        self.calls.append(('chdir', path))
+    def ilistdir(self, path):
+        return iter([(name, 0x8000, 0) for name in sorted(self.files)])
+    def stat(self, path):
+        if path == '/':
+            return (0x4000, 0, 0, 0, 0, 0, 0, 0, 0, 0)
+        if path[1:] not in self.files:
+            raise OSError(2)
+        return (0x8000, 0, 0, 0, 0, 0, len(self.files[path[1:]]), 0, 0, 0)
+    def open(self, path, mode):
+        self.calls.append(('open', path, mode))
+        return io.BytesIO(self.files[path[1:]]) if 'b' in mode else io.StringIO(self.files[path[1:]].decode())
+
+memory = MemoryVFS({'greeting.py': b'WORDS = "hello from memory"\\n', 'note.txt': b'a note'})
+"""
+
+
+def test_a_filesystem_mounted_by_hub_code_serves_open_listdir_chdir_and_imports(hub):
+    run(hub, MEMORY_VFS)
+    namespace = run(
+        hub,
+        "os.mount(memory, '/mem')\n"
+        "table = [point for _fs, point in vfs.mount()]\n"
+        "listing = os.listdir('/mem')\n"
+        "note = open('/mem/note.txt').read()\n"
+        "os.chdir('/mem')\n"
+        "here = os.getcwd()\n"
+        "import greeting\n"
+        "words = greeting.WORDS\n"
+        "os.umount('/mem')\n"
+        "after = (os.getcwd(), len(vfs.mount()))\n",
+    )
+    assert namespace["table"] == ["/", "/mem"]
+    assert namespace["listing"] == ["greeting.py", "note.txt"]
+    assert namespace["note"] == "a note" and namespace["here"] == "/mem"
+    assert namespace["words"] == "hello from memory"
+    assert namespace["after"] == ("/", 1)  # unmounting the working directory goes back to the flash
+    calls = namespace["memory"].calls
+    assert calls[0] == ("mount", False) and ("chdir", "/") in calls and calls[-1] == ("umount",)
+
+
+def test_a_soft_reset_unmounts_everything_but_the_flash(hub):
+    run(hub, MEMORY_VFS + "os.mount(memory, '/mem')\n")
+    hub.reset()
+    namespace = run(hub, "import vfs\ntable = [point for _fs, point in vfs.mount()]\n")
+    assert namespace["table"] == ["/"]
+    with pytest.raises(OSError):
+        run(hub, "import os\nos.umount('/mem')\n")
