@@ -260,22 +260,43 @@ def run(info, args, program) -> int:
     return OUTCOME_STATUS.get(outcome, EXIT_FAILED)
 
 
+class _StopSignal(KeyboardInterrupt):
+    """SIGTERM or SIGHUP, handled as Ctrl-C is (openbricks_server.commands.run.STOP_SIGNALS)."""
+
+
 def _follow(console: Console, ws, follower: _RunFollower, name: str) -> None:
+    """The run's events until it ends. The first Ctrl-C (or SIGTERM, SIGHUP) asks the console to stop
+    it and keeps following until the hub confirms; a second one leaves without the confirmation."""
+    import signal
+
+    from openbricks_server.commands.run import STOP_SIGNALS, say
+
+    def on_signal(number, _frame):
+        raise _StopSignal(STOP_SIGNALS[number])
+
+    previous = {
+        number: signal.signal(number, on_signal) for number in STOP_SIGNALS if number != signal.SIGINT
+    }
     stopping = False
-    while follower.outcome is None:
-        try:
-            event = json.loads(ws.recv(timeout=EVENT_TIMEOUT_S))
-            if event.get("type") in ("resync", "gap"):
-                follower.catch_up()
-                continue
-            follower.handle(event)
-        except KeyboardInterrupt:
-            if stopping:
-                raise CliError(
-                    f"left without waiting for {name} to confirm the stop; check it with "
-                    f"`openbricks stop -n {name}`",
-                    EXIT_INTERRUPTED,
-                ) from None
-            stopping = True
-            print(f"\n^C: stopping the program on {name} ...", file=sys.stderr, flush=True)
-            console.call("POST", hub_path(name) + "/stop")
+    try:
+        while follower.outcome is None:
+            try:
+                event = json.loads(ws.recv(timeout=EVENT_TIMEOUT_S))
+                if event.get("type") in ("resync", "gap"):
+                    follower.catch_up()
+                    continue
+                follower.handle(event)
+            except KeyboardInterrupt as exc:
+                if stopping:
+                    raise CliError(
+                        f"left without waiting for {name} to confirm the stop; check it with "
+                        f"`openbricks stop -n {name}`",
+                        EXIT_INTERRUPTED,
+                    ) from None
+                stopping = True
+                what = exc.args[0] if isinstance(exc, _StopSignal) else "^C"
+                say(f"\n{what}: stopping the program on {name} ...")
+                console.call("POST", hub_path(name) + "/stop")
+    finally:
+        for number, handler in previous.items():
+            signal.signal(number, handler)

@@ -16,6 +16,9 @@ import pytest
 pytestmark = pytest.mark.e2e
 
 CLI_TIMEOUT_S = 90
+FOREVER = (
+    "from openbricks.tools import wait\nn = 0\nwhile True:\n    print('loop', n)\n    n += 1\n    wait(100)\n"
+)
 
 
 @pytest.fixture(scope="module")
@@ -123,3 +126,22 @@ def test_list_upload_log_and_stop_go_through_the_console(console, tmp_path):
     )
     stopped = cli(console, "stop", "-n", "SimHub-1")
     assert stopped.returncode == 0 and stopped.stdout == "SimHub-1: no program was running\n"
+
+
+def test_ctrl_c_on_a_run_through_the_console_stops_it_and_waits_for_the_confirmation(console, tmp_path):
+    program = tmp_path / "forever.py"
+    program.write_text(FOREVER)
+    process = subprocess.Popen(
+        [sys.executable, "-m", "openbricks_server.cli", "run", "-n", "SimHub-1", str(program)],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env=console,
+    )
+    assert process.stdout.readline() == "loop 0\n"  # running on the hub, through the console
+    process.send_signal(signal.SIGINT)
+    out, err = process.communicate(timeout=CLI_TIMEOUT_S)
+    assert process.returncode == 130, err
+    assert "^C: stopping the program on SimHub-1 ..." in err
+    assert "stopped: SimHub-1 confirmed the program ended" in err
+    assert "Traceback" not in err
