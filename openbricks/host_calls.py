@@ -395,7 +395,9 @@ class _Watch:
         self.nonce = nonce
 
     def frame(self, kind, payload):
-        print(FRAME_PREFIX + self.nonce + " " + kind + " " + json.dumps(payload))
+        text = FRAME_PREFIX + self.nonce + " " + kind + " " + json.dumps(payload) + "\n"
+        print(text, end="")
+        log.count_printed(text)  # inside the program's output: counted with it (log.printed)
 
     def _on_running(self, running):
         session = log.active()
@@ -454,6 +456,8 @@ def run(path=None, watch=None, name=None):
         try:
             newest = _last_run(launcher.get().log_dir)
             result["run"] = newest if newest != before else None
+            if result["run"] is not None:
+                result["printed_bytes"], result["printed_crc32"] = log.printed()
             break
         except KeyboardInterrupt as exc:
             interrupted = exc
@@ -503,6 +507,7 @@ def _read_run(index, offset, max_bytes, log_dir):
         "index": index,
         "offset": offset,
         "text": data.decode(),
+        "crc32": binascii.crc32(data) & 0xFFFFFFFF,  # the host checks the slice arrived intact
         "next_offset": end if end < total else None,
         "total_bytes": total,
     }

@@ -500,6 +500,7 @@ class Launcher:
             )
             self._stop_pressed_ms = None
             self._halts_mark = halts
+            log.reset_printed()
             _set_running(True)
             try:
                 _execute(path, name)
@@ -520,6 +521,7 @@ class Launcher:
                 self._wind_down()  # before the traceback: printing it over BLE takes a while
                 text = traceback_text(exc) + _advice(exc, free)
                 log.console_print(text, end="")
+                log.count_printed(text)
                 log.write_text(text)
                 log.write_text("stopped: %s after %d ms" % (_exception_line(exc), self._elapsed_ms()))
             finally:

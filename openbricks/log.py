@@ -19,6 +19,7 @@ framing lines still fit in a small reserve after the cap, because the end of a r
 what its owner wants to read.
 """
 
+import binascii
 import os
 import time
 
@@ -300,19 +301,41 @@ def worst_write_ms():
     return 0 if current is None else current.worst_write_ms
 
 
+_printed = [0, 0]  # bytes and crc32 of what the running program printed, as the console sends it
+
+
+def reset_printed():
+    """Start counting a new run's console output (the launcher, as a run starts)."""
+    _printed[0] = 0
+    _printed[1] = 0
+
+
+def printed():
+    """(bytes, crc32) of the run's console output so far, as it went out (every newline as CR LF):
+    the host checks what reached it against this, and reads the run log when they differ."""
+    return _printed[0], _printed[1]
+
+
+def count_printed(text):
+    data = text.replace("\n", "\r\n").encode()
+    _printed[0] += len(data)
+    _printed[1] = binascii.crc32(data, _printed[1]) & 0xFFFFFFFF
+
+
 def tee_print(*args, **kwargs):
-    """print() that also copies its text into the active run's log.
+    """print() that also copies its text into the active run's log, and counts it (printed()).
 
     The launcher installs it for the program's duration; teeing at print is what MicroPython allows
     on every port (sys.stdout is not rebindable everywhere).
     """
     console_print(*args, **kwargs)
+    sep = kwargs.get("sep")
+    end = kwargs.get("end")
+    text = (" " if sep is None else sep).join([str(a) for a in args]) + ("\n" if end is None else end)
+    count_printed(text)
     current = _active[0]
     if current is not None:
-        sep = kwargs.get("sep")
-        end = kwargs.get("end")
-        text = (" " if sep is None else sep).join([str(a) for a in args])
-        current.write(text + ("\n" if end is None else end))
+        current.write(text)
 
 
 console_print = print  # the interpreter's own print, kept before anyone tees it

@@ -61,3 +61,32 @@ def missing_run(name: str, index: int, indices: list[int], slots: int) -> str:
     if index < indices[0]:
         return f"run {index} of {name} was overwritten: a hub keeps only its last {slots} runs; {kept}"
     return f"{name} has no log of run {index} (its slot was reused or removed); {kept}"
+
+
+# Lines the launcher writes into a run log itself (never on the console): the rest is the program's.
+LAUNCHER_LINES = (
+    "-- run_",
+    "started: ",
+    "stopped: ",
+    "button pressed -> stop",
+    "estop engaged",
+    "log capped at ",
+    "watcher tick starved",
+    "watched: ",
+    "a motor halt",
+    "native scheduler reset failed",
+)
+
+
+def program_lines(log_text: str) -> list[str]:
+    """The lines a run's program put on the console, from its run log: stamps off, the launcher's
+    own lines left out."""
+    lines = []
+    for line in log_text.split("\n"):
+        stamped = _STAMPED.match(line.rstrip("\r"))
+        if not stamped:
+            continue
+        text = stamped.group(2)
+        if not text.startswith(LAUNCHER_LINES):
+            lines.append(text)
+    return lines

@@ -121,6 +121,7 @@ async def _talk(session, program):
     finally:
         for number in STOP_SIGNALS:
             loop.remove_signal_handler(number)
+    _report_damage(session.name, result)
     outcome = result.get("outcome", "error")
     which = "before it started" if result.get("run") is None else f"(run {result['run']})"
     if outcome == "stopped":
@@ -128,6 +129,19 @@ async def _talk(session, program):
     elif outcome == "error":
         say(f"the program ended with an error {which}")
     return outcome
+
+
+def _report_damage(name: str, result: dict) -> None:
+    """Output that did not arrive intact (a damaged or dropped link): the lines from the run log."""
+    damaged = result.get("damaged_lines")
+    if damaged:
+        say(f"\n{len(damaged)} line(s) of the output above did not arrive intact; from {name}'s run log:")
+        TerminalOutput()("".join(line + "\n" for line in damaged).encode())
+    elif result.get("unverified"):
+        say(
+            f"\nthe output above may be incomplete, and {name}'s run log could not be read to check it "
+            f"({result['unverified']}); read it with `openbricks log -n {name} --run {result.get('run')}`"
+        )
 
 
 def main(args) -> int:

@@ -15,6 +15,7 @@ import json
 import math
 import re
 import secrets
+import zlib
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
@@ -128,6 +129,10 @@ class CallOutput:
         self.ended = False
         self.output = bytearray()
         self.results: list[dict] = []
+        #: Bytes and crc32 of what arrived between the program frame and its result frame, to
+        #: check against what the hub says its program printed.
+        self.program_bytes = 0
+        self.program_crc32 = 0
 
     def feed(self, data: bytes) -> bytes | None:
         """Take the next bytes of the command's stdout; once its end (Ctrl-D) is among them, returns
@@ -206,6 +211,9 @@ class CallOutput:
             return
         data = bytes(data)
         self.output += data
+        if self._program:
+            self.program_bytes += len(data)
+            self.program_crc32 = zlib.crc32(data, self.program_crc32)
         if self._on_output is not None:
             self._on_output(data)
 

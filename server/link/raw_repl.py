@@ -14,15 +14,18 @@ has a timeout and a `LinkTimeout` that names what was awaited.
 from __future__ import annotations
 
 import asyncio
+import zlib
+from collections import Counter
 from collections.abc import Awaitable, Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
 from openbricks_server.link import file_transfer
 from openbricks_server.link.base import Link
-from openbricks_server.link.errors import HubException, LinkDropped, LinkTimeout, ProtocolError
+from openbricks_server.link.errors import HubException, LinkDropped, LinkError, LinkTimeout, ProtocolError
 from openbricks_server.link.host_call import CallOutput, Command, HubInfo, command, single_result
 from openbricks_server.link.raw_paste import RAW_BANNER, CommandInput
+from openbricks_server.logview import program_lines
 
 CTRL_A, CTRL_B, CTRL_C, CTRL_D = b"\x01", b"\x02", b"\x03", b"\x04"
 SOFT_REBOOT = b"soft reboot\r\n"
@@ -40,6 +43,8 @@ class ExecResult:
     stdout: bytes
     stderr: bytes
     results: list[dict] = field(default_factory=list)
+    #: (bytes, crc32) of the output between a program frame and its result frame (run).
+    program: tuple[int, int] = (0, 0)
 
 
 @dataclass(frozen=True)
@@ -240,9 +245,11 @@ class RawRepl:
                     await self._cancel_requested_paste(early, timeout_s)
                 else:
                     await self._await_prompt(timeout_s)
-                raise HubException(
+                error = HubException(
                     self.hub, result.stderr.decode("utf-8", "replace"), result.stdout, result.results
                 )
+                error.program = result.program
+                raise error
             results.append(result)
             if stop_when is not None and stop_when(result) and requested:
                 await self._cancel_requested_paste(early, timeout_s)
@@ -288,7 +295,9 @@ class RawRepl:
             "the command's error output", timeout_s, read_errors, follow_drops, on_link_event
         )
         self._prompt_pending = True
-        return ExecResult(bytes(output.output), bytes(stderr), output.results)
+        return ExecResult(
+            bytes(output.output), bytes(stderr), output.results, (output.program_bytes, output.program_crc32)
+        )
 
     async def _read_resilient(
         self,
@@ -386,20 +395,56 @@ class RawRepl:
         if name is not None:
             data["name"] = name  # tracebacks name the program's own file, not the staged one
         await self._await_prompt(self.timeout_s)
+        drops = []
+
+        def link_event(event: LinkEvent) -> None:
+            drops.append(event)
+            if on_link_event is not None:
+                on_link_event(event)
+
         try:
             (result,) = await self.exec_many(
                 [command(("run", data))],
                 on_output=on_output,
                 timeout_s=timeout_s,
                 follow_drops=True,
-                on_link_event=on_link_event,
+                on_link_event=link_event,
+            )
+            shown, program, reply = (
+                result.stdout,
+                result.program,
+                single_result(self.hub, "run", result.results, result.stdout),
             )
         except HubException as exc:
             # A stopped run prints its result, then lets KeyboardInterrupt through.
-            if exc.results and "KeyboardInterrupt" in exc.traceback:
-                return single_result(self.hub, "run", exc.results, exc.stdout)
-            raise
-        return single_result(self.hub, "run", result.results, result.stdout)
+            if not (exc.results and "KeyboardInterrupt" in exc.traceback):
+                raise
+            shown, program = exc.stdout, getattr(exc, "program", (0, 0))
+            reply = single_result(self.hub, "run", exc.results, exc.stdout)
+        return await self._check_output(reply, shown, program, bool(drops))
+
+    async def _check_output(self, reply: dict, shown: bytes, program: tuple[int, int], dropped: bool) -> dict:
+        """The run's reply, with `damaged_lines` when what arrived does not add up with what the hub
+        says its program printed (a damaged link, bytes lost in a drop): the program's lines from
+        the hub's run log that did not arrive intact. `unverified` says why they could not be read."""
+        printed = (reply.get("printed_bytes"), reply.get("printed_crc32"))
+        if reply.get("run") is None or printed[0] is None or (not dropped and tuple(program) == printed):
+            return reply
+        try:
+            text, offset = "", 0
+            while offset is not None:
+                page, offset = await self.read_run_page(reply["run"], offset)
+                text += page
+        except LinkError as exc:
+            return dict(reply, unverified=str(exc))
+        arrived = Counter(shown.decode("utf-8", "replace").replace("\r\n", "\n").split("\n"))
+        damaged = []
+        for line in program_lines(text):
+            if arrived[line] > 0:
+                arrived[line] -= 1
+            else:
+                damaged.append(line)
+        return dict(reply, damaged_lines=damaged)
 
     async def read_run_page(self, index: int, offset: int, *, timeout_s: float | None = None):
         """One slice of run `index`'s log from byte `offset`: (text, next offset or None). A reply
@@ -411,6 +456,7 @@ class RawRepl:
             or reply.get("offset") != offset
             or not isinstance(text, str)
             or not (following is None or (isinstance(following, int) and following > offset))
+            or ("crc32" in reply and zlib.crc32(text.encode("utf-8", "surrogatepass")) != reply["crc32"])
         ):
             raise ProtocolError(
                 f"{self.hub} answered {str(reply)[:80]!r} for run {index}'s log at byte {offset}: "

@@ -52,7 +52,7 @@ def test_a_watched_run_announces_its_log_key_and_tags_its_plot_samples():
     with tmpdir.scratch() as directory:
         source = (
             "from openbricks.tools import plot\n"
-            "print('@openbricks:%s plot {\"name\": \"forged\", \"value\": 1}')\n"
+            'print(\'@openbricks:%s plot {"name": "forged", "value": 1}\')\n'
             "plot('speed', 12.5)\n" % "0000"
         )
         path = _stage(directory, source)

@@ -79,8 +79,7 @@ def test_an_exception_leaves_its_full_traceback_in_the_log():
 def test_a_host_run_traceback_names_the_users_file_and_shows_only_its_frames():
     with tmpdir.scratch() as directory:
         source = (
-            "from openbricks.tools import plot\n\n"
-            "def build():\n    plot('speed', float('nan'))\n\nbuild()\n"
+            "from openbricks.tools import plot\n\ndef build():\n    plot('speed', float('nan'))\n\nbuild()\n"
         )
         hub = _hub(directory, source)
         assert hub.run_program("host run", name="mission.py", reraise_interrupt=False) == "error"

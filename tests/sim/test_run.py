@@ -46,10 +46,7 @@ def test_an_exception_ends_the_run_with_the_programs_traceback():
 
 
 def test_a_traceback_shows_the_programs_frames_only_as_on_a_hub():
-    source = (
-        "from openbricks.tools import plot\n\n"
-        "def build():\n    plot('speed', float('nan'))\n\nbuild()\n"
-    )
+    source = "from openbricks.tools import plot\n\ndef build():\n    plot('speed', float('nan'))\n\nbuild()\n"
     result = run(source)
     assert result.exit == ERROR
     assert result.error == (

@@ -218,7 +218,9 @@ async def session(bench: Bench, seed: int, sizes: tuple[int, int], faults_per_se
     if result is not None and bench.runs_started() != before:
         truth = bench.log_lines(result.get("run"))
         outcome.lines_logged = len(truth)
-        lost = Counter(truth) - Counter(_program_lines(shown.decode("utf-8", "replace")))
+        # What the host showed: the streamed output, and the lines it restored from the run log.
+        restored = "\n".join(result.get("damaged_lines") or [])
+        lost = Counter(truth) - Counter(_program_lines(shown.decode("utf-8", "replace") + "\n" + restored))
         if log_text is not None:
             lost |= Counter(truth) - Counter(_program_lines(log_text))
         outcome.lines_lost = sum(lost.values())

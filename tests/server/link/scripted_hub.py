@@ -35,6 +35,7 @@ TRACEBACK_HEAD = b'Traceback (most recent call last):\r\n  File "<stdin>", line 
 # The hub's stdin ring is a little larger than MICROPY_REPL_STDIN_BUFFER_MAX (260 for 256): room for a
 # Ctrl-D and the next raw-paste request that a host sends right after a full window.
 RING_SLACK_BYTES = 4
+LOG_STAMP = "1767225600000 "  # the epoch stamp every run-log line starts with
 
 
 class ScriptedHub:
@@ -60,6 +61,7 @@ class ScriptedHub:
         #: Each run's printed text by run number, as the hub's run log holds it (read_run pages it).
         self.run_logs: dict[int, str] = {}
         self.logging_run: int | None = None
+        self.printed = (0, 0)  # bytes and crc32 of the running program's console output
         self._send: Callable[[bytes], None] = lambda data: None
         self._loop: asyncio.AbstractEventLoop | None = None
         self._mode = "friendly"  # friendly | raw | paste | busy
@@ -208,9 +210,15 @@ class ScriptedHub:
         self._post(self._send, text.replace("\n", "\r\n").encode())
 
     def _program_print(self, text: str) -> None:
-        """A running program's print: to the console and into its run log, as the launcher tees it."""
+        """A running program's print: to the console, counted (bytes and crc32 as sent), and into its
+        run log with a stamp per line, as the launcher tees it."""
         if self.logging_run is not None:
-            self.run_logs[self.logging_run] += text
+            log = self.run_logs[self.logging_run]
+            for piece in text.splitlines(keepends=True):
+                log += (LOG_STAMP if log == "" or log.endswith("\n") else "") + piece
+            self.run_logs[self.logging_run] = log
+            sent = text.replace("\n", "\r\n").encode()
+            self.printed = (self.printed[0] + len(sent), zlib.crc32(sent, self.printed[1]))
         self._stdout(text)
 
     def _run_command(self, text: str) -> None:
@@ -434,6 +442,7 @@ class _HostCalls:
                 "index": index,
                 "offset": offset,
                 "text": piece.decode(),
+                "crc32": zlib.crc32(piece),
                 "next_offset": end if end < len(data) else None,
                 "total_bytes": len(data),
             }
@@ -450,15 +459,19 @@ class _HostCalls:
         namespace = {"__name__": "__main__", "__builtins__": hub._builtins()}
         self._frame("program")
         hub.logging_run = hub.runs
+        hub.printed = (0, 0)
         try:
             exec(compile(source.decode(), name or path, "exec"), namespace)  # noqa: S102
         except KeyboardInterrupt:
             hub.logging_run = None
-            self._reply({"ok": True, "outcome": "stopped", "run": hub.runs})
+            self._reply({"ok": True, "outcome": "stopped", "run": hub.runs, **self._printed()})
             raise
         except Exception as exc:  # noqa: BLE001
             hub.logging_run = None
             hub._stdout(f"Traceback (most recent call last):\n{type(exc).__name__}: {exc}\n")
-            return self._reply({"ok": True, "outcome": "error", "run": hub.runs})
+            return self._reply({"ok": True, "outcome": "error", "run": hub.runs, **self._printed()})
         hub.logging_run = None
-        return self._reply({"ok": True, "outcome": "finished", "run": hub.runs})
+        return self._reply({"ok": True, "outcome": "finished", "run": hub.runs, **self._printed()})
+
+    def _printed(self) -> dict:
+        return {"printed_bytes": self.hub.printed[0], "printed_crc32": self.hub.printed[1]}
