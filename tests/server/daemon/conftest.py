@@ -56,26 +56,26 @@ class Daemon:
 
     def client(self, token: str | None = None, **kwargs) -> httpx.Client:
         headers = {"Authorization": f"Bearer {token or self.token}"}
-        return httpx.Client(base_url=self.url, headers=headers, timeout=10, **kwargs)
+        return httpx.Client(base_url=self.url, headers=headers, timeout=30, **kwargs)
 
     def websocket(self, query: str = "", token: str | None = None, origin: str | None = None, rcvbuf=None):
         """A WebSocket client; `rcvbuf` shrinks its socket's receive buffer (a client on a slow link)."""
         sock = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
         if rcvbuf:
             sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, rcvbuf)
-        sock.settimeout(10)
+        sock.settimeout(30)
         sock.connect(("127.0.0.1", self.config.port))
         return connect(
             sock=sock,
             uri=self.ws_url + (f"?{query}" if query else ""),
             origin=origin or self.origin,
             additional_headers={"Authorization": f"Bearer {token or self.token}"},
-            open_timeout=10,
+            open_timeout=30,
             close_timeout=2,
             max_size=None,
         )
 
-    def call(self, fn, *args, timeout: float = 10):
+    def call(self, fn, *args, timeout: float = 30):
         """Run `fn(*args)` on the daemon's event loop (where hub actors call HubEvents) and return it."""
 
         async def run():

@@ -89,7 +89,7 @@ def test_a_websocket_from_a_foreign_origin_is_refused(daemon):
     assert refused.value.response.status_code == 403
     assert json.loads(refused.value.response.body)["error"] == "origin_not_allowed"
     with daemon.websocket() as ws:
-        assert json.loads(ws.recv(timeout=5))["type"] == "hello"
+        assert json.loads(ws.recv(timeout=30))["type"] == "hello"
 
 
 def _example(schema, spec):
@@ -135,18 +135,18 @@ def test_the_viewer_is_refused_every_mutating_websocket_command(daemon, viewer_t
     mutating = [name for name, command in COMMANDS.items() if command.mutating]
     assert "stop_all" in mutating
     with daemon.websocket(token=viewer_token) as ws:
-        json.loads(ws.recv(timeout=5))
+        json.loads(ws.recv(timeout=30))
         for name in mutating:
             ws.send(json.dumps({"cmd": name, "id": name}))
-            reply = json.loads(ws.recv(timeout=5))
+            reply = json.loads(ws.recv(timeout=30))
             while reply["type"] != "reply":
-                reply = json.loads(ws.recv(timeout=5))
+                reply = json.loads(ws.recv(timeout=30))
             assert reply["data"]["ok"] is False and reply["data"]["error"]["error"] == "operator_required"
 
 
 def test_every_mutating_call_is_audited_with_who_role_what_and_result(daemon, operator):
     with daemon.websocket() as ws:
-        json.loads(ws.recv(timeout=5))
+        json.loads(ws.recv(timeout=30))
         ws.send(json.dumps({"cmd": "stop_all", "id": 1}))
         reply = json.loads(ws.recv(timeout=30))
     assert reply["data"] == {"id": 1, "cmd": "stop_all", "ok": True, "result": {"hubs": []}}

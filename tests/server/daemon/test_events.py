@@ -13,11 +13,11 @@ from openbricks_server.daemon.hub_events import HubState, OutputLine, RunStart
 from .conftest import start_daemon
 
 
-def recv(ws, timeout=10):
+def recv(ws, timeout=30):
     return json.loads(ws.recv(timeout=timeout))
 
 
-def numbered(ws, count, timeout=10):
+def numbered(ws, count, timeout=30):
     """The next `count` numbered events (control messages other than gap/resync are skipped)."""
     out = []
     while len(out) < count:
