@@ -138,6 +138,9 @@ class Recorder:
             run_id = run["run_id"]
             have = self.store.runs.line_numbers(run_id)
             missing = [ln for ln in lines if ln.line_no not in have]
+            self.store.runs.stamp(
+                run_id, [(ln.line_no, ln.text, ln.hub_ms) for ln in lines if ln.line_no in have and ln.hub_ms]
+            )
         if missing:
             seq = self.bus.next_seq()
             self.store.runs.append(

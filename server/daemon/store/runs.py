@@ -108,6 +108,15 @@ class Runs:
                     samples,
                 )
 
+    def stamp(self, run_id: str, stamps: list[tuple[int, str, int]]) -> None:
+        """The hub's own time stamps `(line_no, text, hub_ms)` from its run log, for lines captured live
+        without them; a line whose text differs from the log's keeps no stamp rather than a wrong one."""
+        with self.db.transaction() as conn:
+            conn.executemany(
+                "UPDATE output_lines SET hub_ms=? WHERE run_id=? AND line_no=? AND text=? AND hub_ms IS NULL",
+                [(hub_ms, run_id, line_no, text) for line_no, text, hub_ms in stamps],
+            )
+
     def add_gap(self, run_id: str, reason: str, since_ms: int, until_ms: int | None) -> None:
         with self.db.transaction() as conn:
             conn.execute(

@@ -83,9 +83,14 @@ def test_two_hubs_run_at_once_through_the_api_and_the_history_survives_a_restart
             assert "print('" + tag + "', i)" in detail["source"]
             samples = api.get(f"/api/runs/{run_id}/telemetry").json()
             assert [s["value"] for s in samples] == [0, 1, 2, 3, 4, 5]
-        # the log read back after the run is the same run, not a second one
+        # the log read back after the run is the same run, not a second one, and stamps its lines
         wait_idle(api, ["SimHub-1", "SimHub-2"])
         assert {r["run_id"] for r in api.get("/api/runs").json()} == set(runs)
+        for run_id in runs:
+            lines = api.get(f"/api/runs/{run_id}/output").json()["lines"]
+            started = api.get(f"/api/runs/{run_id}").json()["started_ms"]
+            stamps = [ln["hub_ms"] for ln in lines]
+            assert all(stamp and stamp >= started for stamp in stamps) and stamps == sorted(stamps)
     daemon2.stop()
     again = start_daemon(tmp_path / "data", virtual=0)
     try:
