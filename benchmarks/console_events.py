@@ -70,7 +70,7 @@ def _one(producers: int) -> list[Row]:
             idle_kb = _rss_kb(pid)
             results = _clients(url, token, producers)
             done = daemon.stdout.readline().split()
-            produced, loaded_kb, cpu = int(done[1]), int(done[2]), float(done[3]) / float(done[4])
+            produced, loaded_kb, cpu_s, wall_s = int(done[1]), int(done[2]), float(done[3]), float(done[4])
         finally:
             daemon.send_signal(signal.SIGINT)
             try:
@@ -89,7 +89,16 @@ def _one(producers: int) -> list[Row]:
         Row(f"{case}: latency p99", p99, "ms", "target < 50 ms"),
         Row(f"{case}: lines lost", lost, "lines", note),
         Row(
-            f"{case}: daemon CPU", cpu * 100, "% of a core", f"while producing and sending ({produced} lines)"
+            f"{case}: daemon CPU",
+            cpu_s / wall_s * 100,
+            "% of a core",
+            f"producing and sending, {wall_s:.1f} s",
+        ),
+        Row(
+            f"{case}: daemon CPU per line delivered",
+            cpu_s * 1e6 / max(1, produced * CLIENTS),
+            "us",
+            "load-independent: one free core delivers 1e6/this lines/s",
         ),
         Row(f"{case}: daemon RSS idle", idle_kb / 1024, "MB", "started, no client, no hub"),
         Row(f"{case}: daemon RSS after", loaded_kb / 1024, "MB", f"after {SECONDS} s of output"),
