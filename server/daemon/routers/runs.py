@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import asyncio
 import re
 from datetime import datetime
 from typing import Literal
@@ -118,7 +119,8 @@ def _run(request: Request, run_id: str) -> dict:
 async def search_runs(request: Request, query: RunQuery = Depends(_query)) -> list[RunSummary]:
     """Runs newest first, narrowed by hub, text, date, outcome, origin and program."""
     request.app.state.ctx.hub_events.flush()
-    return [RunSummary(**r) for r in request.app.state.ctx.store.runs.search(query)]
+    found = await asyncio.to_thread(request.app.state.ctx.store.runs.search, query)  # FTS over a long history
+    return [RunSummary(**r) for r in found]
 
 
 @router.get(
@@ -130,7 +132,8 @@ async def export_runs(request: Request, query: RunQuery = Depends(_query)) -> Re
     """The runs a search finds, each as text and JSON, in one zip."""
     ctx = request.app.state.ctx
     ctx.hub_events.flush()
-    data = runs_zip(ctx.store.runs, ctx.store.runs.search(query))
+    runs = ctx.store.runs
+    data = await asyncio.to_thread(lambda: runs_zip(runs, runs.search(query)))  # off the event loop
     return Response(
         data,
         media_type="application/zip",
@@ -185,7 +188,7 @@ async def export_run(request: Request, run_id: str, format: Literal["json", "tex
     ctx.hub_events.flush()
     if format == "text":
         return PlainTextResponse(
-            run_text(ctx.store.runs, run),
+            await asyncio.to_thread(run_text, ctx.store.runs, run),
             headers={"content-disposition": f'attachment; filename="{run_id}.txt"'},
         )
-    return RunExport(**run_json(ctx.store.runs, run))
+    return RunExport(**await asyncio.to_thread(run_json, ctx.store.runs, run))
