@@ -103,7 +103,12 @@ def _ensure_dir(path):
     try:
         os.mkdir(path)
     except OSError:
-        os.stat(path)  # already there is fine; anything else (no such parent, a file) raises
+        mode = os.stat(path)[0]  # already there is fine; no such parent raises
+        if not mode & 0x4000:  # S_IFDIR: a file stored at the folder's name would fail every run
+            raise OSError(
+                "%s is a file, but the hub keeps its run logs in a folder of that name: remove "
+                "the file (mpremote rm %s)" % (path, path)
+            ) from None
 
 
 class _LogSession:

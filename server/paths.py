@@ -44,9 +44,18 @@ def cache_dir() -> Path:
 
 def runtime_dir() -> Path:
     """Root of what lives only while a process runs (gone after a reboot on most systems)."""
+    import warnings
+
     import platformdirs
 
-    return _from_env_or(RUNTIME_DIR_ENV, lambda: platformdirs.user_runtime_path(APP_NAME, appauthor=False))
+    with warnings.catch_warnings():
+        # Without XDG_RUNTIME_DIR (a container, `su`, an ssh session on some systems) platformdirs
+        # warns, naming its own source line, and falls back to /tmp/runtime-UID: the fallback is
+        # right, the warning is noise at every command.
+        warnings.simplefilter("ignore")
+        return _from_env_or(
+            RUNTIME_DIR_ENV, lambda: platformdirs.user_runtime_path(APP_NAME, appauthor=False)
+        )
 
 
 def ensure(path: Path) -> Path:

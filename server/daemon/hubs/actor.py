@@ -46,7 +46,7 @@ from openbricks_server.daemon.hubs.errors import (
     ProgramRejectedError,
 )
 from openbricks_server.daemon.hubs.output import LineCounter, OutputParser, RunLog, now_ms, parse_run_log
-from openbricks_server.errors import CliError
+from openbricks_server.errors import CliError, UsageError
 from openbricks_server.link import HubCallError, HubException, LinkDropped, LinkError, LinkTimeout
 from openbricks_server.link.base import Link
 from openbricks_server.link.host_call import HubInfo, call_source
@@ -471,8 +471,8 @@ class HubActor:
             error = exc
         except ProgramError as exc:
             error = ProgramRejectedError(str(exc), "fix the program and send it again")
-        except StorageError as exc:
-            error = HubRefusedError(str(exc), "store it at another path on the hub")
+        except (StorageError, UsageError) as exc:  # where the file was to go: the hub cannot, or must not
+            error = HubRefusedError(str(exc), "check the path given for the file")
         except HubCallError as exc:
             error = HubRefusedError(f"{self.name}: {exc.error}", "see the message")
         except HubException as exc:

@@ -28,7 +28,7 @@ OVERSIZED_BYTES = 300_000  # above the 256 KB a hub takes
 # What a person must never be shown: the CLI's insides.
 _TRACEBACK = re.compile(r"Traceback \(most recent call last\)|^\s+File \".*\", line \d+, in ", re.MULTILINE)
 _ERRNO = re.compile(r"\[Errno|\b(ENOENT|ENOTDIR|EISDIR|EACCES|ENOSPC|EEXIST|EINVAL|EIO|ENODEV)\b")
-_EXCEPTION_NAME = re.compile(r"\b[A-Z]\w*(?:Error|Exception)\b")
+_EXCEPTION_NAME = re.compile(r"\b[A-Z]\w*(?:Error|Exception|Warning)\b")
 # Exception names a user meets in their own program's terms: Python's syntax errors of their code,
 # and what their program raised on the hub.
 _USER_FACING = {"SyntaxError", "IndentationError", "TabError", "MemoryError"}
@@ -42,6 +42,7 @@ class Case:
     words: tuple[str, ...]
     program_error: bool = False  # the user's program raised: its own traceback is the point
     answer_within_s: float | None = None  # refused before any port or hub is touched
+    unset: tuple[str, ...] = ()  # environment variables the person's session lacks
 
 
 def case(id_, argv, status, *words, **options):
@@ -178,11 +179,16 @@ CASES = [
         "there is no folder /nodir on the hub",
     ),
     case(
-        "upload-onto-a-folder",
+        "upload-onto-the-run-logs",  # a file there would fail every later run
         "upload -n {hub} --path /openbricks_logs {f}/ok.py",
-        FAILED,
-        "/openbricks_logs is a folder on the hub",
-        "name a file inside it",
+        USAGE,
+        "the hub keeps its run logs there",
+    ),
+    case(
+        "upload-into-the-run-logs",
+        "upload -n {hub} --path /openbricks_logs/slot_0.log {f}/ok.py",
+        USAGE,
+        "the hub keeps its run logs there",
     ),
     case(
         "upload-under-a-file",
@@ -220,6 +226,14 @@ CASES = [
     ),
     case("log-word-run", "log -n {hub} --run last", USAGE, "'last' is not a run number"),
     case("log-unknown-hub", "log -n Nope --scan-timeout 0.5", FAILED, "no hub named 'Nope'"),
+    case(
+        "log-without-a-runtime-dir",  # a container or `su` session: no XDG_RUNTIME_DIR, no warning either
+        "log -n Nope --scan-timeout 0.5",
+        FAILED,
+        "no hub",
+        "'Nope'",
+        unset=("XDG_RUNTIME_DIR", "OPENBRICKS_RUNTIME_DIR"),
+    ),
     # -- list ------------------------------------------------------------------------------------
     case("list-negative-timeout", "list --timeout -3", USAGE, "positive number of seconds"),
     case("list-zero-timeout", "list --timeout 0", USAGE, "positive number of seconds"),
@@ -407,7 +421,8 @@ def catalogue_env(hub, tmp_path_factory):
 def test_bad_input_gets_a_clear_answer(bad: Case, catalogue_env, files, silent_port):
     args = [part.format(f=files, hub=HUB, silent_port=silent_port) for part in bad.argv]
     started = time.monotonic()
-    done = cli(catalogue_env, *args)
+    env = {name: value for name, value in catalogue_env.items() if name not in bad.unset}
+    done = cli(env, *args)
     elapsed_s = time.monotonic() - started
     said = done.stderr + done.stdout
 
@@ -691,6 +706,15 @@ API_CASES = [
         "hub_refused",
         "there is no folder /nodir on the hub",
         json={"source": "pass", "path": "/nodir/x.py"},
+    ),
+    api(
+        "hub-upload-onto-the-run-logs",
+        "POST",
+        "/api/hubs/SimHub-1/upload",
+        422,
+        "hub_refused",
+        "the hub keeps its run logs there",
+        json={"source": "pass", "path": "/openbricks_logs"},
     ),
     api(
         "hub-identify-zero",
