@@ -87,6 +87,16 @@ class HubEvents(Protocol):
     def run_ended(self, run_id: str, outcome: RunOutcome, detail: str | None, ended_ms: int) -> None:
         """The run is over; `detail` is the error line or the stop reason."""
 
-    def run_log_read(self, hub_id: str, slot: int, started_ms: int, lines: list[OutputLine]) -> None:
+    def run_log_read(
+        self,
+        hub_id: str,
+        slot: int,
+        started_ms: int,
+        lines: list[OutputLine],
+        outcome: RunOutcome = "finished",
+        detail: str | None = None,
+    ) -> None:
         """A run-log slot read back from the hub: the core matches it to a stored run by
-        (hub, slot, started_ms), fills what live capture missed, or stores it as a run of origin "log"."""
+        (hub, slot, started_ms), fills what live capture missed, or stores it as a run of origin "log"
+        that ended with `outcome` (the log's last line: finished, stopped, error with `detail`, or
+        interrupted when the log has no end: the hub reset or lost power mid-run)."""

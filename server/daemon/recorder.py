@@ -115,7 +115,15 @@ class Recorder:
         self._hub_of_run.pop(run_id, None)
         self.bus.publish("run_ended", self.store.runs.get(run_id), hub=hub, run=run_id)
 
-    def run_log_read(self, hub_id: str, slot: int, started_ms: int, lines: list[OutputLine]) -> None:
+    def run_log_read(
+        self,
+        hub_id: str,
+        slot: int,
+        started_ms: int,
+        lines: list[OutputLine],
+        outcome: RunOutcome = "finished",
+        detail: str | None = None,
+    ) -> None:
         self.flush()
         run = self.store.runs.find_by_slot(hub_id, slot, started_ms)
         if run is None:
@@ -129,8 +137,8 @@ class Recorder:
                 slot=slot,
                 boot_id=self.bus.boot_id,
                 ended_ms=ended_ms,
-                outcome="finished",
-                detail=FROM_RUN_LOG,
+                outcome=outcome,
+                detail=f"{detail} ({FROM_RUN_LOG})" if detail else FROM_RUN_LOG,
             )
             self.bus.publish("run_started", self.store.runs.get(run_id), hub=hub_id, run=run_id)
             missing = lines

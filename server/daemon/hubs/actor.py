@@ -444,6 +444,8 @@ class HubActor:
             await asyncio.gather(watch, return_exceptions=True)
             job = job_get.result()
             if job is _DISCONNECT or (isinstance(job, _Job) and job.work is _DISCONNECT_WORK):
+                await self._close_link()
+                self._set_status("offline")
                 if isinstance(job, _Job) and not job.future.done():
                     job.future.set_result(None)
                 return
@@ -717,7 +719,14 @@ class HubActor:
                 parsed = await self._read_run(index)
             except (HubCallError, HubRefusedError):
                 continue  # overwritten meanwhile
-            self.events.run_log_read(self.hub_id, index % slots, parsed.started_ms, parsed.lines)
+            self.events.run_log_read(
+                self.hub_id,
+                index % slots,
+                parsed.started_ms,
+                parsed.lines,
+                parsed.outcome or "interrupted",
+                parsed.detail if parsed.outcome else "the log has no end: the hub reset or lost power",
+            )
             self._pulled[index] = size
 
     # -- stop: around the queue ---------------------------------------------------------------------

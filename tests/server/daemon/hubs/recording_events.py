@@ -60,8 +60,8 @@ class RecordingEvents:
         self.runs[run_id].ended = (outcome, detail, ended_ms)
         self._poke()
 
-    def run_log_read(self, hub_id, slot, started_ms, lines):
-        self.logs.append((hub_id, slot, started_ms, lines))
+    def run_log_read(self, hub_id, slot, started_ms, lines, outcome="finished", detail=None):
+        self.logs.append((hub_id, slot, started_ms, lines, outcome, detail))
         self._poke()
 
     def statuses(self, hub_id: str) -> list[str]:

@@ -160,3 +160,34 @@ def test_a_run_started_with_the_hub_button_is_captured_live_and_matched_to_its_l
     assert run.start.program_name == "mission.py"
     (log,) = events.logs
     assert (log[1], log[2]) == (run.start.slot, run.start.started_ms)
+
+
+def test_an_untethered_button_run_is_read_back_on_connect_with_its_outcome(data_dir):
+    async def scenario():
+        manager, events = await started_hubs(data_dir, 1)
+        try:
+            (hub,) = manager.list()
+            await hub.upload(program("print('alone')\nprint(1 // 0)\n", "crash.py"), who="a")
+            await hub.disconnect("a")
+            assert hub.state.status == "offline"
+            record = json.loads((data_dir / "virtual-hubs" / "SimHub-1" / "endpoint.json").read_text())
+            await asyncio.to_thread(control, Path(record["control"]), {"op": "click"})
+            async with asyncio.timeout(20):
+                while (await asyncio.to_thread(control, Path(record["control"]), {"op": "status"}))[
+                    "runs_started"
+                ] < 1 or (await asyncio.to_thread(control, Path(record["control"]), {"op": "status"}))[
+                    "running"
+                ]:
+                    await asyncio.sleep(0.1)
+            await hub.connect(60)
+            await events.until(lambda: len(events.logs) >= 1)
+            return events
+        finally:
+            await manager.close()
+
+    events = asyncio.run(scenario())
+    assert not [r for r in events.runs.values() if r.start.origin == "button"]  # nobody watched it live
+    (log,) = events.logs
+    hub_id, _slot, _started, lines, outcome, detail = log
+    assert hub_id == "virtual:SimHub-1" and outcome == "error" and "ZeroDivisionError" in detail
+    assert lines[0].text == "alone" and any("ZeroDivisionError" in line.text for line in lines)
