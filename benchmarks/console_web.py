@@ -165,19 +165,26 @@ def frame_time(browser, console, hubs: list[dict]) -> list[Row]:
         page.goto(console.url)  # signs in
         page.goto(f"{console.base}/#/output")
         page.wait_for_selector("[data-testid=output-pane]")
+        page.wait_for_timeout(1000)
+        idle = page.evaluate(FRAMES_JS, 3000)["deltas"][1:]  # the same page with nothing streaming
         for hub in hubs:
             console.run(api, hub["hub_id"], "stream.py")
         try:
             page.wait_for_timeout(2000)  # every hub streaming before measuring
             counted_from = {r["run_id"]: r["line_count"] for r in console.open_runs(api)}
+            cdp = context.new_cdp_session(page)
+            cdp.send("Performance.enable")
+            before = {m["name"]: m["value"] for m in cdp.send("Performance.getMetrics")["metrics"]}
             t0 = time.monotonic()
             result = page.evaluate(FRAMES_JS, MEASURE_S * 1000)
             elapsed = time.monotonic() - t0
+            after = {m["name"]: m["value"] for m in cdp.send("Performance.getMetrics")["metrics"]}
             counted_to = {r["run_id"]: r["line_count"] for r in console.open_runs(api)}
         finally:
             api.post("/api/hubs/stop-all").raise_for_status()
             context.close()
     deltas = result["deltas"][1:]
+    busy = {k: (after[k] - before[k]) / elapsed for k in ("TaskDuration", "ScriptDuration", "LayoutDuration")}
     lines = sum(counted_to.get(run, 0) - n for run, n in counted_from.items())
     streaming = len(counted_from)
     return [
@@ -188,12 +195,25 @@ def frame_time(browser, console, hubs: list[dict]) -> list[Row]:
             f"{len(deltas)} frames over {MEASURE_S:.0f} s; target < 50",
         ),
         Row("frame time p50", percentile(deltas, 0.50), "ms"),
+        Row(
+            "frame time p95, same page idle",
+            percentile(idle, 0.95),
+            "ms",
+            "baseline: what the machine's load alone costs the page",
+        ),
         Row("frame time max", max(deltas), "ms"),
         Row(
             "long animation frames (> 50 ms)",
             len(result["long"]),
             "frames",
             f"longest {max(result['long'], default=0):.0f} ms",
+        ),
+        Row(
+            "page main thread busy",
+            100 * busy["TaskDuration"],
+            "%",
+            f"script {100 * busy['ScriptDuration']:.0f} %, layout {100 * busy['LayoutDuration']:.0f} % "
+            "(DevTools Performance.getMetrics)",
         ),
         Row(
             "lines streamed to the page",

@@ -292,3 +292,87 @@ def test_a_dropped_event_stream_resumes_without_losing_or_repeating_a_line(conso
         assert counts == list(range(LONG_LINES)), "lines lost or repeated across reconnects"
     finally:
         context.close()
+
+
+PLOTTING = """from openbricks.tools import plot, wait
+
+for i in range(40):
+    plot("speed", i * 10)
+    plot("heading", 90 - i)
+    print("sample", i)
+    wait(25)
+"""
+
+
+def test_telemetry_from_plot_is_drawn_live_and_kept_with_the_run(console, page_for):
+    page = page_for(console.url)
+    hub = console.wait_hubs_idle(2)[0]
+    open_program(page, "plotting.py", PLOTTING)
+    page.locator("label.target", has_text=hub["name"]).locator("input").check()
+    page.click("[data-testid=run]")
+    page.goto(page.url.split("#")[0] + "#/telemetry")
+    card = page.locator("[data-testid=telemetry-card]", has_text=hub["name"])
+    card.wait_for()
+    # uPlot's legend names each series once it has samples.
+    card.locator(".u-legend", has_text="speed").wait_for()
+    card.locator(".u-legend", has_text="heading").wait_for()
+    card.locator("canvas").first.wait_for()
+    card.locator(".badge", has_text="finished").wait_for(timeout=30000)
+    screenshot(page, "telemetry-live")
+    # Kept with the run: the history's telemetry tab draws it again from the store.
+    run = wait_for(lambda: [r for r in runs(console) if r["program_name"] == "plotting.py"], what="the run")[
+        0
+    ]
+    with console.api() as c:
+        samples = c.get(f"/api/runs/{run['run_id']}/telemetry").json()
+    assert {s["name"] for s in samples} == {"speed", "heading"} and len(samples) == 80
+    page.goto(page.url.split("#")[0] + f"#/history?run={run['run_id']}")
+    page.get_by_role("tab", name="telemetry").click()
+    page.locator("[data-testid=run-detail] .u-legend", has_text="heading").wait_for()
+    screenshot(page, "history-telemetry")
+
+
+def test_competition_mode_locks_uploads_while_a_run_is_on_and_keys_work(console, page_for):
+    page = page_for(console.url)
+    hubs = console.wait_hubs_idle(2)
+    name = hubs[0]["name"]
+    page.check("header .comp input")
+    page.get_by_role("button", name="Start match").click()
+    timer = page.locator("[data-testid=match-timer]")
+    first = timer.inner_text()
+    page.wait_for_timeout(1200)
+    assert timer.inner_text() != first, "the match timer does not run"
+
+    open_program(page, "forever.py", FOREVER)
+    page.keyboard.press("Control+s")  # saved through the daemon
+    page.locator(".foot", has_text="Stored by the daemon").wait_for()
+    page.locator("label.target", has_text=name).locator("input").check()
+    page.keyboard.press("F5")  # run
+    page.goto(page.url.split("#")[0] + "#/dashboard")
+    tile = page.locator(f"[data-testid=hub-tile][data-hub='{name}']")
+    tile.locator("[data-testid=hub-status]", has_text="running").wait_for()
+    # While it runs, nothing can be uploaded or started, and the reason is on screen.
+    page.goto(page.url.split("#")[0] + "#/editor")
+    page.locator("[data-testid=readonly-reason]", has_text="Competition mode").wait_for()
+    assert page.is_disabled("[data-testid=run]")
+    assert "Competition mode" in (page.get_attribute("[data-testid=run]", "title") or "")
+    screenshot(page, "editor-competition-locked")
+    page.keyboard.press("F6")  # stop the selected hub
+    page.goto(page.url.split("#")[0] + "#/dashboard")
+    tile.locator("[data-testid=hub-status]", has_text="idle").wait_for(timeout=15000)
+    page.goto(page.url.split("#")[0] + "#/editor")
+    page.locator("button.prog", has_text="forever.py").click()
+    page.wait_for_function("() => !document.querySelector('[data-testid=run]').disabled")
+
+
+def test_identify_from_a_tile_is_in_the_audit_log(console, page_for):
+    page = page_for(console.url)
+    hub = console.wait_hubs_idle(2)[0]
+    page.locator(f"[data-testid=hub-tile][data-hub='{hub['name']}']").get_by_role(
+        "button", name="Identify"
+    ).click()
+    page.goto(page.url.split("#")[0] + "#/audit")
+    row = page.locator("[data-testid=audit] tr", has_text="identify")
+    row.first.wait_for()
+    assert "done" in row.first.inner_text()
+    screenshot(page, "audit")
