@@ -50,7 +50,7 @@ class Console:
         api.post(f"/api/hubs/{hub}/run", json={"program": program}).raise_for_status()
 
     def open_runs(self, api: httpx.Client) -> list[dict]:
-        return api.get("/api/runs", params={"outcome": "running", "limit": 1000}).json()
+        return api.get("/api/runs", params={"outcome": "running", "limit": 1000}, timeout=60).json()
 
     def sign_in_url(self, token: str, page: str = "dashboard") -> str:
         return f"{self.base}/?token={token}#/{page}"
