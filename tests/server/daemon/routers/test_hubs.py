@@ -156,3 +156,13 @@ def test_a_stored_program_runs_by_name_and_a_button_run_reaches_the_history(daem
         assert run["outcome"] == "finished" and run["program_name"] == "square.py"
         lines = api.get(f"/api/runs/{run['run_id']}/output").json()["lines"]
         assert [ln["text"] for ln in lines] == ["stored one"]
+        wait_idle(api, ["SimHub-1"])
+        identified = api.post("/api/hubs/SimHub-1/identify", json={"duration_ms": 1000})
+        assert identified.status_code == 200 and identified.json()["identify_ms"] == 1000
+        logs = api.get("/api/hubs/SimHub-1/logs").json()
+        assert [entry["index"] for entry in logs] == [0, 1] and all(entry["bytes"] > 0 for entry in logs)
+        read = api.get("/api/hubs/SimHub-1/logs/1").json()
+        assert read["trigger"] == "button press" and read["outcome"] == "finished"
+        assert [line["text"] for line in read["lines"]] == ["stored one"] and "-- run_1 --" in read["text"]
+        gone = api.get("/api/hubs/SimHub-1/logs/7")
+        assert gone.status_code == 404 and gone.json()["error"] == "log_not_found"
