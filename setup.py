@@ -46,5 +46,12 @@ setup(
             depends=[f"{NATIVE}/ob_types.h", *sorted(glob(f"{NATIVE}/bindings/cpython/py_*.h"))],
             extra_compile_args=["-O2", "-std=gnu99", "-Wall", "-Wextra", "-Wno-missing-field-initializers"],
         ),
+        # The simulator's Python-time charge (sim/python_cost.py): a C profile function, because a
+        # Python one would cost more host time than the control path it shares the process with.
+        Extension(
+            "openbricks_pycost",
+            sources=["sim/native/python_cost/python_cost.c"],
+            extra_compile_args=["-O2", "-std=gnu99", "-Wall", "-Wextra", "-Wno-missing-field-initializers"],
+        ),
     ],
 )

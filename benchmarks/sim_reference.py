@@ -20,8 +20,8 @@ Then one run each on the simulators' own competition tables (ours `wro`, theirs 
 different tables, so only an indication of how each copes with walls and props.
 
 Note: the manual's example wires the left wheel as servo 2 (mirrored) and the right as servo 1; our
-simulated chassis has servo 1 on the left and servo 2 mirrored on the right, so in our simulator the
-same program drives the mirror image of the square. The work per simulated second is the same.
+simulator mounts the servos where the program's DriveBase says they are, so it drives the same
+square, turning right.
 """
 
 from __future__ import annotations

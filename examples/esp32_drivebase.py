@@ -16,7 +16,7 @@ CPU nothing per encoder edge. The right motor is mounted mirrored: invert=True.
 
 Run with:
     openbricks run -n <hub> examples/esp32_drivebase.py
-    openbricks sim run examples/esp32_drivebase.py --chassis jgb37
+    openbricks sim run examples/esp32_drivebase.py
 """
 
 import time

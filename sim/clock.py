@@ -71,6 +71,7 @@ class SimClock:
         self._queue = []  # heap of (due_us, sequence, _Scheduled)
         self._sequence = 0
         self._firing = False
+        self._stepping = False  # inside physics.step(): the controllers' tick is running
         self.speed = speed
         self.limit_ms = limit_ms
         self._stop = threading.Event()
@@ -96,7 +97,13 @@ class SimClock:
         self._epoch_base_us = int(epoch_ms) * 1000 - self._now_us
 
     def charge_cpu_us(self, us: int) -> None:
-        """Let a little time pass for work done on the CPU (a ticks_*() call, a bus transfer)."""
+        """Let a little time pass for work done on the CPU (a ticks_*() call, a bus transfer).
+
+        Inside the physics step (a controller's Python heading source reading an I2C IMU on the
+        1 kHz tick) time is already passing, one tick at a time: the transfer is part of that
+        tick, as on the hub, and must not step the physics from within itself."""
+        if self._stepping:
+            return
         self.advance_us(us)
 
     # --- timers -------------------------------------------------------------------------------
@@ -153,7 +160,7 @@ class SimClock:
             finally:
                 self._firing = False
         self._run_physics_to(target)
-        self._now_us = target
+        self._now_us = max(self._now_us, target)  # a timer callback's own charges may have gone past
 
     def _run_physics_to(self, t_us: int) -> None:
         physics = self._physics
@@ -168,13 +175,20 @@ class SimClock:
         if n_ms <= 0:
             return
         if self.speed is None:
-            self._physics.step(n_ms)
+            self._physics_step(n_ms)
             return
         while n_ms > 0:
             chunk = min(n_ms, PACE_SLICE_MS)
             self._pace(self._physics.now_ms + chunk)
-            self._physics.step(chunk)
+            self._physics_step(chunk)
             n_ms -= chunk
+
+    def _physics_step(self, n_ms: int) -> None:
+        self._stepping = True
+        try:
+            self._physics.step(n_ms)
+        finally:
+            self._stepping = False
 
     def _pace(self, sim_ms: int) -> None:
         """Wait until the wall clock has caught up with sim_ms at the configured speed."""

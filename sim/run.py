@@ -34,6 +34,7 @@ from .cli import limit_argument, seed_argument
 from .clock import SimStopped, SimTimeLimit
 from .limits import DEFAULT_MEMORY_MB, CpuLimitExceeded, contain, default_cpu_s, default_wall_s
 from .program_robot import ProgramRobot, infer_chassis
+from .python_cost import PythonCost
 from .run_flash import HubDirError, RunFlash, prepare_hub_dir
 from .sensors.rig import BARE_0X29, RANGE_FINDERS
 from .shim import Shim
@@ -129,7 +130,7 @@ class ProgramRun:
         saved_streams = sys.stdout, sys.stderr
         started = time.perf_counter()
         try:
-            with Shim(sim), RunFlash(self.hub_dir) as flash, ProgramRobot(sim):
+            with Shim(sim), RunFlash(self.hub_dir) as flash, ProgramRobot(sim), PythonCost(sim.clock):
                 sys.stdout = sys.stderr = output
                 if watchdog is not None:
                     watchdog.start()

@@ -2,7 +2,8 @@
 
   I2C0 (SDA 15, SCL 16)  TCA9548A at 0x70; a TCS34725 on channel n for each chassis colour
                          site color_n (channel 0 = left, 1 = right); the laser range finder
-                         (a VL53L0X, or a VL53L1X) on channel 7; a BNO055 at 0x28
+                         (a VL53L0X, or a VL53L1X) on channel 7; a BNO055 at 0x28; a 128x64
+                         SSD1306 OLED at 0x3C
   SPI (SCK 12, MOSI 13, MISO 11, CS 17)  ICM-45686; on the DC build (jgb37) SCK 4, MOSI 5, MISO 6,
                          CS 21 instead, because that build's motors take 11, 12, 13 and 17
   ADC GPIO 1..10         the QTRLineSensor window over the `qtr` site
@@ -30,6 +31,7 @@ from dataclasses import dataclass
 import mujoco
 
 from ..chassis import color_site
+from ..display import SSD1306Model
 from .color import TCS34725Model
 from .distance import ForwardRay, HCSR04Model, VL53L0XModel, VL53L1XModel, sonar_ray
 from .imu import BNO055Model, BodyMotion, ICM45686Model
@@ -40,6 +42,7 @@ from .qtr import QTRBarModel
 I2C_BUS = 0
 MUX_ADDRESS = 0x70
 BNO055_ADDRESS = 0x28
+OLED_ADDRESS = 0x3C
 SHARED_ADDRESS = 0x29  # every TCS34725 and both VL53 parts
 RANGE_FINDER_CHANNEL = 7
 HCSR04_TRIG, HCSR04_ECHO = 18, 40
@@ -73,6 +76,7 @@ class Sensors:
     range_finder: object  # the laser ranger: on mux channel 7, or on the bare bus
     bare_0x29: object  # what is wired straight to the bus at 0x29, if anything
     hcsr04: HCSR04Model
+    oled: SSD1306Model
     imu_spi: SpiPins = ICM45686_SPI["st3032"]  # where this chassis wires the ICM-45686
 
 
@@ -124,6 +128,7 @@ def attach_sensors(physics, board, seed: int = 0, range_finder="vl53l0x", bare_0
     motion = BodyMotion(model, data)
     bno = BNO055Model(motion, now_us, seed=seed * 101 + 20)
     bus[BNO055_ADDRESS] = bno
+    oled = bus[OLED_ADDRESS] = SSD1306Model()
     icm = ICM45686Model(motion, now_us, seed=seed * 101 + 21)
     imu_spi = icm45686_spi(physics.chassis.name)
     board.attach_spi(imu_spi.cs, icm)
@@ -136,7 +141,7 @@ def attach_sensors(physics, board, seed: int = 0, range_finder="vl53l0x", bare_0
     for pin in qtr.pins:
         board.set_analog(pin, qtr.channel(pin).read)
 
-    return Sensors(colours, mux, qtr, icm, bno, ranger, bare, sonar, imu_spi)
+    return Sensors(colours, mux, qtr, icm, bno, ranger, bare, sonar, oled, imu_spi)
 
 
 def _bare_colour_sensor(probe, now_us, seed):

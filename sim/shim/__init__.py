@@ -4,7 +4,7 @@
         exec(program)            # `import machine, time` now reach the simulated hub
 
 Installing puts the simulator's `machine`, `time`, `micropython`, `esp32`,
-`bluetooth`, `neopixel` and `_openbricks_native` into sys.modules, and takes
+`bluetooth`, `neopixel`, `framebuf` and `_openbricks_native` into sys.modules, and takes
 any already-imported hub runtime (`openbricks`, `openbricks.*`) out of the
 way so the program imports a fresh copy bound to these modules. Uninstalling
 puts every one of those entries back as it was and drops the copies the
@@ -17,9 +17,18 @@ import sys
 import traceback
 import types
 
-from . import bluetooth, esp32, machine, micropython, mptime, neopixel
+from . import bluetooth, esp32, framebuf, machine, micropython, mptime, neopixel
 
-SHIMMED = ("machine", "time", "micropython", "esp32", "bluetooth", "neopixel", "_openbricks_native")
+SHIMMED = (
+    "machine",
+    "time",
+    "micropython",
+    "esp32",
+    "bluetooth",
+    "neopixel",
+    "framebuf",
+    "_openbricks_native",
+)
 _RUNTIME_PACKAGE = "openbricks"
 
 
@@ -83,6 +92,7 @@ class Shim:
                 "esp32": esp32,
                 "bluetooth": bluetooth,
                 "neopixel": neopixel,
+                "framebuf": framebuf,
                 "_openbricks_native": native_module(sim.serial_bus),
             }
         )

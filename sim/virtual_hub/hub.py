@@ -22,6 +22,8 @@ import threading
 from dataclasses import dataclass
 
 from ..shim import micropython as shim_micropython
+from ..program_robot import ProgramRobot
+from ..python_cost import PythonCost
 from . import frozen
 from .console import ConsoleIn, ConsoleOut, make_input
 from .gate import InterruptGate
@@ -82,6 +84,7 @@ class VirtualHub:
         self._events = queue.Queue()
         self._closing = threading.Event()
         self.gate = InterruptGate()
+        self._program_robot = None  # serve() installs it, after the hub's own import finder
         self.nvs = PersistentNVS(os.path.join(config.directory, NVS_FILE))
         self._name_hub(config.name)
         self.fs = HubFS(os.path.join(config.directory, FLASH_DIR), config.flash_bytes)
@@ -163,6 +166,7 @@ class VirtualHub:
         self.world.install()
         shim_micropython.bind_kbd_intr(self._set_interrupt_char)
         self.python.install()
+        self._program_robot = ProgramRobot(self.world.simulation).install()  # after the hub's finder
         try:
             self._reset(hard=True)
             while not self._closing.is_set():
@@ -194,6 +198,8 @@ class VirtualHub:
 
     def close(self):
         self._closing.set()
+        if self._program_robot is not None:
+            self._program_robot.uninstall()
         self.python.uninstall()
         self.world.close()
         self.port.close()
@@ -207,7 +213,8 @@ class VirtualHub:
         try:
             try:
                 self.gate.open()
-                self.python.run(code)
+                with PythonCost(self.world.clock):  # spinning code lets time pass
+                    self.python.run(code)
             except BaseException as exc:  # whatever hub code raised is its result
                 outcome = exc
             finally:

@@ -168,3 +168,19 @@ def test_dc_build_square_closes_on_its_start_and_the_gyro_agrees(tmp_path):
     last = re.findall(r"side 4: odometry ([+-][0-9.]+) deg, gyro ([+-][0-9.]+) deg", result["output"])
     odometry, gyro = (float(v) for v in last[0])
     assert abs(odometry - 360.0) < 2.0 and abs(gyro - odometry) < 1.0
+
+
+def test_bno055_gyro_square_finishes_and_closes(tmp_path):
+    # The I2C IMU as the DriveBase's heading source: its reads happen on the control tick.
+    result = run_example(EXAMPLES / "bno055_square.py", tmp_path)
+    corners = [float(h) for h in re.findall(r"corner \d: heading ([+-]?[0-9.]+)", result["output"])]
+    for corner, expected in zip(corners, (90.0, 180.0, 270.0, 0.0), strict=True):
+        assert heading_error_deg(corner, expected) < 2.0
+    pose = result["pose"]
+    assert math.hypot(pose["x_mm"], pose["y_mm"]) < 10.0
+    assert heading_error_deg(pose["heading_deg"], 0.0) < 2.0
+
+
+def test_oled_example_draws_while_it_drives(tmp_path):
+    result = run_example(EXAMPLES / "oled_status.py", tmp_path)
+    assert "done: 800 mm, 360 deg" in result["output"] or "done: 801 mm, 360 deg" in result["output"]

@@ -145,3 +145,29 @@ def test_a_run_process_caps_its_memory_and_a_hog_ends_in_its_own_memory_error(tm
     assert result["exit"] == MEMORY_LIMIT and out.returncode == 3
     assert "MemoryError" in result["error"]
     assert "memory limit: the program ran out of its 400 MB of memory (--memory-mb)" in result["error"]
+
+
+def test_a_busy_wait_on_done_finishes_because_python_costs_simulated_time():
+    # No sleep in the loop: on a hub the tick runs on while Python spins, and here every call the
+    # program makes costs a few simulated microseconds, so the move ends and so does the loop.
+    source = (
+        "from openbricks.drivers.st3032 import ST3032Motor\n"
+        "from openbricks.robotics import DriveBase\n"
+        "left = ST3032Motor(servo_id=1, uart_id=1, tx=14, rx=41)\n"
+        "right = ST3032Motor(servo_id=2, uart_id=1, tx=14, rx=41, invert=True)\n"
+        "db = DriveBase(left, right, wheel_diameter_mm=88, axle_track_mm=138)\n"
+        "db.straight(300, wait=False)\n"
+        "while not db.done():\n"
+        "    pass\n"
+        "print('arrived')\n"
+    )
+    result = run(source, wall_limit_s=120)
+    assert result.exit == FINISHED, result.error
+    assert result.output == "arrived\n"
+    assert abs(result.pose["x_mm"] - 300.0) < 5.0
+
+
+def test_python_time_is_counted_so_a_run_repeats_exactly():
+    source = "n = 0\nwhile n < 20000:\n    n = n + abs(1)\nimport time\nprint(time.ticks_us())\n"
+    first, second = run(source), run(source)
+    assert first.output == second.output and int(first.output) > 0
