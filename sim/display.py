@@ -4,8 +4,10 @@ The model speaks the controller's I2C protocol (datasheet 8.1.5): each write sta
 byte, 0x00 for a stream of commands, 0x40 for display RAM. It keeps the 128 x 64 RAM (8 pages of
 one byte per column, bit 0 at the top), the column/page window and horizontal addressing that a
 refresh streams into, the on/off, invert and contrast settings, and the segment remap / COM scan
-direction, so `lit(x, y)` and `rows()` give the picture a person would see on the panel.
+direction, so `picture()` gives what a person would see on the panel (`lit(x, y)`, `rows()`).
 """
+
+from dataclasses import dataclass
 
 COLUMNS = 128
 PAGES = 8
@@ -90,6 +92,37 @@ class SSD1306Model:
 
     # --- what the panel shows ---------------------------------------------------------------
 
+    def picture(self):
+        """What the panel shows now, as an immutable copy (cheap: for a viewer on another thread)."""
+        return Picture(
+            bytes(self.ram),
+            self.width,
+            self.height,
+            self.on,
+            self.inverted,
+            self.segment_remap,
+            self.com_reversed,
+            self.writes,
+        )
+
+    def lit(self, x, y):
+        return self.picture().lit(x, y)
+
+    def rows(self, lit="#", dark="."):
+        return self.picture().rows(lit, dark)
+
+
+@dataclass(frozen=True)
+class Picture:
+    ram: bytes
+    width: int
+    height: int
+    on: bool
+    inverted: bool
+    segment_remap: bool
+    com_reversed: bool
+    writes: int
+
     def lit(self, x, y):
         """Whether the panel's pixel (x, y) is lit, (0, 0) at the top-left as the driver draws it."""
         if not self.on or not (0 <= x < self.width and 0 <= y < self.height):
@@ -105,3 +138,13 @@ class SSD1306Model:
         return [
             "".join(lit if self.lit(x, y) else dark for x in range(self.width)) for y in range(self.height)
         ]
+
+    def block_text(self):
+        """The picture in half-block characters, two pixel rows per line (for a text panel)."""
+        glyphs = {(True, True): "\u2588", (True, False): "\u2580", (False, True): "\u2584"}
+        lines = []
+        for y in range(0, self.height, 2):
+            lines.append(
+                "".join(glyphs.get((self.lit(x, y), self.lit(x, y + 1)), " ") for x in range(self.width))
+            )
+        return "\n".join(lines)

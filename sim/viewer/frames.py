@@ -24,6 +24,7 @@ class Frame:
     x_mm: float
     y_mm: float
     heading_deg: float  # clockwise from +x, as the manual writes headings
+    display: object = None  # the OLED's Picture (sim/display.py) once the program drew on it
 
 
 def capture(simulation) -> Frame:
@@ -41,4 +42,10 @@ def capture(simulation) -> Frame:
         x_mm=pose.x_mm,
         y_mm=pose.y_mm,
         heading_deg=pose.heading_deg,
+        display=_display(simulation),
     )
+
+
+def _display(simulation):
+    oled = getattr(getattr(simulation, "sensors", None), "oled", None)
+    return oled.picture() if oled is not None and oled.writes else None

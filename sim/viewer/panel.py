@@ -29,6 +29,8 @@ _OUTPUT_STYLE = (
     "display:flex;flex-direction:column-reverse;height:14em;overflow-y:auto;"
     "background:#1e1f22;color:#e6e6e6;border-radius:4px;padding:4px 6px;"
 )
+_DISPLAY_STYLE = "background:#05070a;border-radius:4px;padding:4px;overflow-x:auto;"
+_DISPLAY_PRE_STYLE = "margin:0;font-size:0.42em;line-height:1.0;color:#8fd3ff;"
 _PRE_STYLE = "margin:0;font-size:0.78em;line-height:1.35;white-space:pre-wrap;word-break:break-all;"
 
 
@@ -88,6 +90,8 @@ class ControlPanel:
             view.on_click(lambda _event: on_view())
         with gui.add_folder("Output"):
             self._output = gui.add_html(self._output_html([]))
+        self._gui = gui
+        self._display = None  # the OLED's picture, shown once the program draws on it
 
     def set_speed(self, speed: float | None) -> None:
         """Show `speed` as the chosen one (a run that arrived with a speed of its own)."""
@@ -113,6 +117,17 @@ class ControlPanel:
 
     def show_output(self, lines: list[str]) -> None:
         self._output.content = self._output_html(lines)
+
+    def show_display(self, text: str) -> None:
+        """Show what the robot's OLED shows (half-block text, two pixel rows per line)."""
+        content = (
+            f'<div style="{_DISPLAY_STYLE}"><pre style="{_DISPLAY_PRE_STYLE}">{html.escape(text)}</pre></div>'
+        )
+        if self._display is None:
+            with self._gui.add_folder("Display"):
+                self._display = self._gui.add_html(content)
+        else:
+            self._display.content = content
 
     def _show_pause_state(self) -> None:
         if self._pause_button is None:

@@ -359,6 +359,10 @@ class SimViewer:
         if frame is not None:
             self.panel.show_status(self._state, frame.sim_ms, self._real_time_factor(now))
             self.panel.show_pose(frame.x_mm, frame.y_mm, frame.heading_deg)
+        picture = None if frame is None else frame.display
+        if picture is not None and picture.writes != drawn.get("display"):
+            drawn["display"] = picture.writes
+            self.panel.show_display(picture.block_text())
         version = self.output.version
         if version != drawn["output"]:
             drawn["output"] = version

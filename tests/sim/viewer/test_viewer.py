@@ -242,3 +242,21 @@ def test_restart_on_the_page_runs_the_program_again_from_the_start():
     assert results[1].output.startswith("driving") and "stopped at 15" in results[1].output
     assert final is results[1]
     assert final.job["viewer"] is True
+
+
+def test_the_robots_oled_shows_in_the_panel_once_the_program_draws_on_it(viewer, page):
+    source = (
+        "from machine import I2C, Pin\n"
+        "from openbricks.drivers.ssd1306 import SSD1306\n"
+        "import time\n"
+        "oled = SSD1306(I2C(0, sda=Pin(15), scl=Pin(16)))\n"
+        "oled.fill_rect(0, 0, 8, 2, 1)\n"
+        "oled.show()\n"
+        "time.sleep_ms(500)\n"
+    )
+    run_program(viewer, source)
+    time.sleep(0.5)
+    contents = [page.gui_content(m["uuid"]) for _, m in page.messages() if m["type"] == "GuiHtmlMessage"]
+    shown = [c for c in contents if "\u2588" in c]
+    assert shown, "no OLED picture reached the page"
+    assert "\u2588" * 8 + " " * 120 in shown[-1]  # the 8 x 2 block at the top-left, nothing else
