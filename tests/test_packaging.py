@@ -62,5 +62,5 @@ def test_the_wheel_carries_everything_an_installed_openbricks_reads(tmp_path):
     console = "openbricks_server/daemon/static/"
     assert console + "index.html" in names, "the browser console the daemon serves (`make web` builds it)"
     assert any(n.startswith(console + "assets/") and n.endswith(".js") for n in names), "the console's script"
-    for extension in ("openbricks_native", "openbricks_mjcontrol"):
+    for extension in ("openbricks_native", "openbricks_mjcontrol", "openbricks_pycost"):
         assert any(n.startswith(extension) and n.endswith(".so") for n in names), extension

@@ -159,7 +159,7 @@ def test_the_rig_is_wired_as_documented_and_no_0x29_part_sits_on_the_bare_bus():
     sim = Simulation("empty", "st3032", seed=0, epoch_ms=0)
     try:
         sensors = sim.sensors
-        assert set(sim.board.i2c_bus(rig.I2C_BUS)) == {rig.MUX_ADDRESS, rig.BNO055_ADDRESS}
+        assert set(sim.board.i2c_bus(rig.I2C_BUS)) == {rig.MUX_ADDRESS, rig.BNO055_ADDRESS, rig.OLED_ADDRESS}
         assert [ch for ch in range(8) if sensors.mux.channels[ch]] == [0, 1, rig.RANGE_FINDER_CHANNEL]
         assert sim.board.spi_devices[rig.ICM45686_CS] is sensors.icm45686
         assert all(pin in sim.board.analog for pin in range(1, 11))
