@@ -23,7 +23,6 @@ from dataclasses import dataclass
 
 from ..shim import micropython as shim_micropython
 from ..program_robot import ProgramRobot
-from ..python_cost import PythonCost
 from . import frozen
 from .console import ConsoleIn, ConsoleOut, make_input
 from .gate import InterruptGate
@@ -213,8 +212,7 @@ class VirtualHub:
         try:
             try:
                 self.gate.open()
-                with PythonCost(self.world.clock):  # spinning code lets time pass
-                    self.python.run(code)
+                self.python.run(code)
             except BaseException as exc:  # whatever hub code raised is its result
                 outcome = exc
             finally:
