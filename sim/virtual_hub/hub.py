@@ -21,8 +21,8 @@ import sys
 import threading
 from dataclasses import dataclass
 
-from ..shim import micropython as shim_micropython
 from ..program_robot import ProgramRobot
+from ..shim import micropython as shim_micropython
 from . import frozen
 from .console import ConsoleIn, ConsoleOut, make_input
 from .gate import InterruptGate
