@@ -14,8 +14,10 @@ with what the operating system enforces, whatever the code manages to reach insi
 - PR_SET_NO_NEW_PRIVS: nothing it executes can gain privileges (setuid binaries, file caps);
 - a seccomp filter refuses the system calls that make a new process or run a program (fork,
   vfork, clone without CLONE_THREAD, execve, execveat; clone3 answers ENOSYS so the C library
-  falls back to clone, where the flags can be checked). Threads still start. This holds for root
-  too, which is what makes "no new processes" true in a container running as root.
+  falls back to clone, where the flags can be checked), and refuses to change a resource limit
+  (setrlimit, prlimit64 with a new limit: reading one still works). Threads still start. This
+  holds for root too, which is what makes "no new processes" and "limits for good" true in a
+  container running as root.
 
 The in-process layers (the hub's own builtins, imports limited to the ESP32 port's modules, file
 access only on the hub's flash) keep honest programs on the hub's API; they are not a security
@@ -86,17 +88,15 @@ def contain(memory_mb=DEFAULT_MEMORY_MB, cpu_s=None, file_mb=DEFAULT_FILE_MB):
 
 
 def _lower(which, soft, hard=None):
-    """Set a limit no higher than it already is (an unprivileged process cannot raise a hard one)."""
+    """Set a limit for good: the hard limit too (`hard`, else the soft one), so code that reaches
+    setrlimit() cannot raise it again; never above what the limit already is."""
+    hard = soft if hard is None else hard
     old_soft, old_hard = resource.getrlimit(which)
-    infinity = resource.RLIM_INFINITY
-    if old_hard != infinity:
-        soft = min(soft, old_hard)
-        hard = old_hard if hard is None else min(hard, old_hard)
-    elif hard is None:
-        hard = old_hard
-    if old_soft != infinity and old_soft < soft:
-        soft = old_soft
-    resource.setrlimit(which, (soft, max(soft, hard) if hard != infinity else hard))
+    if old_hard != resource.RLIM_INFINITY:
+        hard = min(hard, old_hard)
+    if old_soft != resource.RLIM_INFINITY:
+        soft = min(soft, old_soft)
+    resource.setrlimit(which, (min(soft, hard), hard))
 
 
 def _cpu_limit_reached(_signum, _frame):
@@ -136,10 +136,12 @@ def no_new_privileges():
 
 # -- seccomp: no new processes, no programs run ---------------------------------------------------
 
-# (audit arch, syscalls refused with EPERM, clone, clone3, lowest number of a foreign ABI or None)
+# (audit arch, syscalls refused with EPERM, clone, clone3, prlimit64, lowest number of a foreign ABI)
 _SYSCALLS = {
-    "x86_64": (0xC000003E, (57, 58, 59, 322), 56, 435, 0x40000000),  # fork vfork execve execveat; x32
-    "aarch64": (0xC00000B7, (221, 281), 220, 435, None),  # execve execveat (no fork/vfork calls)
+    # fork vfork execve execveat setrlimit; x32 numbers from 0x40000000 up
+    "x86_64": (0xC000003E, (57, 58, 59, 322, 160), 56, 435, 302, 0x40000000),
+    # execve execveat setrlimit (no fork/vfork calls)
+    "aarch64": (0xC00000B7, (221, 281, 164), 220, 435, 261, None),
 }
 
 _LD_W_ABS = 0x20
@@ -149,10 +151,11 @@ _JSET_K = 0x45
 _RET_K = 0x06
 _RET_ALLOW = 0x7FFF0000
 _RET_ERRNO = 0x00050000
-_NR_OFFSET, _ARCH_OFFSET, _ARG0_OFFSET = 0, 4, 16  # struct seccomp_data (little-endian arg0 low word)
+# struct seccomp_data: nr, arch, then 64-bit args from offset 16 (little-endian: low word first)
+_NR_OFFSET, _ARCH_OFFSET, _ARG0_OFFSET, _ARG2_OFFSET = 0, 4, 16, 32
 
 
-def _filter_program(arch, refused, clone, clone3, foreign_abi):
+def _filter_program(arch, refused, clone, clone3, prlimit, foreign_abi):
     """The BPF program as (code, jump-if-true label, jump-if-false label, k) with labels resolved."""
     program = [
         (_LD_W_ABS, None, None, _ARCH_OFFSET),
@@ -165,9 +168,14 @@ def _filter_program(arch, refused, clone, clone3, foreign_abi):
     program += [
         (_JEQ_K, "clone", None, clone),
         (_JEQ_K, "enosys", None, clone3),
+        (_JEQ_K, "prlimit", None, prlimit),
         (_RET_K, None, None, _RET_ALLOW),
         ("clone", _LD_W_ABS, None, None, _ARG0_OFFSET),
         (_JSET_K, "allow", "deny", CLONE_THREAD),  # a thread (BPF jumps only forward)
+        ("prlimit", _LD_W_ABS, None, None, _ARG2_OFFSET),  # the new limit: NULL reads only
+        (_JEQ_K, None, "deny", 0),
+        (_LD_W_ABS, None, None, _ARG2_OFFSET + 4),
+        (_JEQ_K, "allow", "deny", 0),
         ("allow", _RET_K, None, None, _RET_ALLOW),
         ("deny", _RET_K, None, None, _RET_ERRNO | errno.EPERM),
         ("enosys", _RET_K, None, None, _RET_ERRNO | errno.ENOSYS),

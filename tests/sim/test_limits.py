@@ -18,7 +18,7 @@ def attempt(name, action):
     try:
         action()
         seen[name] = "allowed"
-    except (OSError, MemoryError) as exc:
+    except (OSError, MemoryError, ValueError) as exc:
         seen[name] = type(exc).__name__ + ": " + str(exc)
 
 attempt("fork", os.fork)
@@ -26,6 +26,7 @@ attempt("subprocess", lambda: subprocess.run(["true"]))
 attempt("exec", lambda: os.execv("/bin/true", ["true"]))
 attempt("memory", lambda: bytearray(400 * 1024 * 1024))
 attempt("big file", lambda: open(sys.argv[1], "wb").write(b"x" * 2 * 1024 * 1024))
+attempt("raise memory", lambda: resource.setrlimit(resource.RLIMIT_AS, (2**34, 2**34)))
 thread = threading.Thread(target=lambda: seen.update(thread="ran"))
 thread.start()
 thread.join()
@@ -48,6 +49,7 @@ def test_a_fenced_process_cannot_start_processes_or_outgrow_its_limits_but_runs_
     assert seen["exec"].startswith("PermissionError: [Errno 1]")
     assert seen["memory"] == "MemoryError: "
     assert seen["big file"] == "OSError: [Errno 27] File too large"
+    assert seen["raise memory"].startswith("ValueError") or seen["raise memory"].startswith("PermissionError")
     assert seen["thread"] == "ran" and seen["no_new_privs"] == "1"
 
 
