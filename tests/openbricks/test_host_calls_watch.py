@@ -62,7 +62,7 @@ def test_a_watched_run_announces_its_log_key_and_tags_its_plot_samples():
             result = host_calls.run(watch=NONCE)
         finally:
             console.close()
-        assert result["ok"] and result["outcome"] == "finished"
+        assert result["ok"] and result["outcome"] == "finished", (result, console.lines)
         (begin,) = console.frames("run-begin")
         assert begin == {"run": 0, "slot": 0, "started_ms": _header_stamp(directory + "/logs", 0)}
         assert console.frames("plot") == [{"name": "speed", "value": 12.5}]
