@@ -61,8 +61,9 @@ class Simulation:
             return True
         return wire_bare_colour_sensor(self.sensors, self.physics, self.board, self.physics.seed)
 
-    def serial_bus(self, uart_id):
-        """`_openbricks_native.serial_bus(uart_id)`: the engine a DriveBase adopts serial-bus wheels onto."""
+    def serial_bus(self, uart_id, tx=None, rx=None, baud=1_000_000, dir_pin=None):
+        """`_openbricks_native.serial_bus(uart_id, ...)`: the engine a DriveBase adopts serial-bus wheels onto
+        (the simulated robot's wiring is fixed, so the pins are the program's business only)."""
         return self.wiring.serial_bus(uart_id)
 
     def close(self):

@@ -32,8 +32,9 @@ def _tick(_timer):
 
 def _ticked_elsewhere(native):
     says = getattr(native, "ticks_itself", None)
-    if says is not None:
-        return bool(says() if callable(says) else says)
+    if says is not None and (says() if callable(says) else says):
+        return True
+    # "Not by itself" (or no answer) does not mean nobody ticks it: a timer started earlier may.
     process = native.motor_process
     before = process.tick_count
     time.sleep_ms(_PROBE_MS)

@@ -256,8 +256,8 @@ def _adopt(motor, serial_bus):
                 "UART%d was handed to a bus engine this runtime no longer knows; restart the program"
                 % bus.uart_id
             )
-        uart_id = bus.hand_over()[0]
-        port = _ports[uart_id] = BusPort(serial_bus(uart_id), bus)
+        uart_id, tx, rx, baud, dir_pin = bus.hand_over()
+        port = _ports[uart_id] = BusPort(serial_bus(uart_id, tx=tx, rx=rx, baud=baud, dir_pin=dir_pin), bus)
     slot = port.slot_of(motor)
     if slot is None:
         slot = port.adopt(motor)

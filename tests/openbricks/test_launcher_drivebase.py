@@ -3,7 +3,7 @@ back, and a run that ends mid-drive leaves the wheels released."""
 
 import machine
 
-from fakes import serial_bus_engine, tmpdir
+from fakes import tmpdir
 from fakes.scs_servo import FakeServo, ScsBus
 from openbricks import launcher, log
 
@@ -19,7 +19,6 @@ _BUILD = (
 
 
 def _robot(directory, source):
-    serial_bus_engine.install()
     bus = ScsBus()
     for servo_id in (1, 2):
         bus.add(FakeServo(servo_id))

@@ -34,8 +34,6 @@ gearing) carrying half of a 1 kg two-wheeled robot on a 56 mm wheel. Its mechani
 ``J * no_load_speed / stall_torque`` comes out near 30 ms, typical of small geared servos.
 """
 
-from __future__ import annotations
-
 import math
 
 KG_CM_TO_NM = 0.0980665

@@ -66,14 +66,11 @@ def reset():
     estop = sys.modules.get("openbricks.estop")
     if estop is not None:
         estop.clear(0)
-    # A servo bus a DriveBase handed to the test bus engine, that engine, and the controllers left
-    # subscribed to the native scheduler belong to the test that built them.
+    # A servo bus a DriveBase handed to the bus engine, and the engine and controllers left
+    # subscribed to the native scheduler, belong to the test that built them.
     st3215 = sys.modules.get("openbricks.drivers.st3215")
     if st3215 is not None:
         st3215.forget_buses()
-    engine = sys.modules.get("fakes.serial_bus_engine")
-    if engine is not None:
-        engine.uninstall()
     native = sys.modules.get("_openbricks_native")
     process = getattr(native, "motor_process", None)
     if process is not None:

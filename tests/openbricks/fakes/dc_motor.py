@@ -12,7 +12,7 @@ and moves the encoder (quadrature lines, or a PCNT unit's count) to the
 plant's angle.
 """
 
-from . import clock
+from . import bounded, clock
 from .machine import board
 
 _PHASES = ((0, 0), (1, 0), (1, 1), (0, 1))  # A leading B
@@ -86,7 +86,7 @@ class DCMotorRig:
         self.next_due_us += self.step_us
         duty = self.bridge_duty()
         if not self.duty_log or self.duty_log[-1][1] != duty:
-            self.duty_log.append((clock.now_us() // 1000, duty))
+            bounded.append(self.duty_log, (clock.now_us() // 1000, duty))
         self.plant.step(duty, self.step_us / 1e6)
         if self.wall_deg is not None and self.plant.angle_deg >= self.wall_deg:
             self.plant.angle_deg = self.wall_deg

@@ -10,7 +10,7 @@ widths, and what the runtime drove.
 
 import sys
 
-from . import clock
+from . import bounded, clock
 
 
 class _Board:
@@ -370,7 +370,7 @@ class UART:
         if self.deinited:
             raise OSError("UART%d is deinitialised" % self._id)
         data = bytes(data)
-        self.written.append(data)
+        bounded.append(self.written, data)
         device = board.uart_devices.get(self._id)
         if device is not None:
             reply = device.handle(data)

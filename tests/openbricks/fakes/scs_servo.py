@@ -18,7 +18,7 @@ in its way, and read back every register and the true shaft angle.
 
 import math
 
-from . import clock
+from . import bounded, clock
 
 INST_PING = 0x01
 INST_READ = 0x02
@@ -293,7 +293,7 @@ class FakeServo:
     def write(self, address, data):
         """Apply a register write the way the servo firmware does."""
         self.advance()
-        self.writes.append((address, bytes(data)))
+        bounded.append(self.writes, (address, bytes(data)))
         for i, byte in enumerate(data):
             if address + i < _REG_COUNT:
                 self.regs[address + i] = byte
@@ -369,7 +369,7 @@ class ScsBus:
     def handle(self, data):
         out = b""
         for servo_id, instr, params in self._packets(bytes(data)):
-            self.packets.append((servo_id, instr, params))
+            bounded.append(self.packets, (servo_id, instr, params))
             if instr == INST_SYNC_WRITE:
                 self._sync_write(params)
                 continue

@@ -7,7 +7,6 @@ engine), because the tests are plain functions run back to back in one process.
 import _openbricks_native
 import machine
 
-from fakes import serial_bus_engine
 from fakes.chassis import Chassis
 from fakes.dc_motor import DCMotorRig, QuadratureLines
 from fakes.scs_servo import FakeServo, ScsBus
@@ -27,7 +26,6 @@ def clean_slate():
     pins.reset_claims()
     st3215.forget_buses()
     _openbricks_native.motor_process.reset()
-    serial_bus_engine.uninstall()
 
 
 def jgb37_plant():
@@ -112,12 +110,10 @@ class EncoderRobot:
 class ServoRobot:
     """Two ST-3032s on UART1 (TX 14, RX 41), ids 1 (left) and 2 (right, mounted mirror-image)."""
 
-    def __init__(self, engine=True, extra_ids=(), silent_ids=()):
+    def __init__(self, extra_ids=(), silent_ids=()):
         from openbricks.drivers.st3032 import ST3032Motor
 
         clean_slate()
-        if engine:
-            serial_bus_engine.install()
         self.bus = ScsBus()
         for servo_id in (1, 2) + tuple(extra_ids):
             self.bus.add(FakeServo(servo_id))
@@ -139,4 +135,7 @@ class ServoRobot:
         )
 
     def engine(self):
-        return serial_bus_engine.engine(1)
+        """The bus engine the DriveBase handed UART1 to (`_openbricks_native.serial_bus(1)`)."""
+        from openbricks.robotics import wheels
+
+        return wheels._ports[1].engine

@@ -1,15 +1,15 @@
 """DriveBase on two ST-3032 serial-bus servos: adopted onto a bus engine that speaks SCS to the fake servos.
 
-The engine (fakes.serial_bus_engine) stands in for the firmware's hard-tick engine and the simulator's
-emulated one: it owns the UART after the hand-over, drives each servo in open-loop duty mode and
+The engine is the firmware's C engine (`_openbricks_native.serial_bus`), here over the fake board's
+UART: it owns the UART after the hand-over, drives each servo in open-loop duty mode on the tick and
 counts the reads that went unanswered.
 """
 
+import sys
 import time
 
 import _openbricks_native
 
-from fakes import serial_bus_engine
 from fakes.expect import approx, raises
 from fakes.scs_servo import REG_TORQUE_ENABLE
 from openbricks import estop
@@ -40,6 +40,38 @@ def test_straight_and_turn_through_the_engine_land_on_target():
     assert approx(robot.servos[1].angle_deg(), -300 / MM_PER_WHEEL_DEG, 3)
     db.turn(90)
     assert approx(chassis.heading_deg, 90, 1)
+
+
+def test_a_300_mm_square_closes_within_10_mm_and_2_degrees_as_in_the_simulator():
+    robot = ServoRobot()
+    db = robot.drivebase()
+    chassis = robot.chassis
+    for _ in range(4):
+        db.straight(300)
+        db.turn(90)
+    gap = (chassis.x_mm**2 + chassis.y_mm**2) ** 0.5
+    heading_error = (chassis.heading_deg + 180) % 360 - 180
+    print("square: gap %.2f mm, heading error %.2f deg" % (gap, heading_error))
+    assert gap < 10.0, "the square opened by %.1f mm" % gap
+    assert abs(heading_error) < 2.0
+    # Every wheel read on the tick was answered: 1 kHz feedback over the 1 Mbaud bus.
+    for slot in (0, 1):
+        replies, failed, _ = robot.engine().stats(slot)
+        assert failed == 0 and replies > 4000
+
+
+def test_a_wheel_that_goes_silent_mid_drive_raises_naming_it_within_50_ms():
+    robot = ServoRobot()
+    db = robot.drivebase()
+    db.drive(150, 0)
+    time.sleep_ms(300)
+    robot.servos[0].silent = True
+    silent_at = time.ticks_ms()
+    with raises(OSError, "not responding on the bus: left wheel (servo id 1, slot 0)"):
+        for _ in range(100):
+            db.check_motors()
+            time.sleep_ms(1)
+    assert time.ticks_diff(time.ticks_ms(), silent_at) <= 50
 
 
 def test_stop_coast_cuts_the_torque_of_both_servos():
@@ -120,19 +152,29 @@ def test_check_motors_raises_once_a_wheel_stops_answering_and_moves_refuse():
     db = robot.drivebase()
     db.check_motors()
     robot.servos[1].silent = True
+    time.sleep_ms(3)  # the engine reads every wheel each tick; three misses in a row make it silent
     with raises(OSError, "right wheel (servo id 2, slot 1) on UART1 tx=14 rx=41"):
         db.check_motors()
     with raises(OSError, "not responding on the bus: right wheel"):
         db.straight(100)
     robot.servos[1].silent = False
+    time.sleep_ms(2)  # the next tick's read hears it again
     db.straight(100)  # answering again: moves work again
     assert approx(robot.chassis.x_mm, 100, 2)
 
 
+class _CoresWithoutTheEngine:
+    """`_openbricks_native` as a build without the bus engine has it (no serial_bus)."""
+
+
 def test_without_a_bus_engine_construction_raises_instead_of_degrading():
-    robot = ServoRobot(engine=False)
-    with raises(RuntimeError, "needs the native bus engine") as caught:
-        robot.drivebase()
+    robot = ServoRobot()
+    sys.modules["_openbricks_native"] = _CoresWithoutTheEngine()
+    try:
+        with raises(RuntimeError, "needs the native bus engine") as caught:
+            robot.drivebase()
+    finally:
+        sys.modules["_openbricks_native"] = _openbricks_native
     assert "ST3032Motor (servo id 1 on UART1 tx=14 rx=41)" in str(caught.value)
     assert not robot.left.bus.handed_over
     robot.left.run_speed(100)  # the motors still work on their own bus
@@ -155,7 +197,8 @@ def test_adopted_motors_keep_their_motor_api_and_take_their_wheel_from_the_drive
     time.sleep_ms(300)
     heading, travel = robot.chassis.heading_deg, robot.chassis.travel_mm
     assert abs(robot.servos[1].speed_dps()) < 1
-    assert _openbricks_native.motor_process.count == 1  # one driver for both wheels: the drive base
+    # One driver for both wheels, the drive base, after the bus engine itself.
+    assert _openbricks_native.motor_process.count == 2
     db.straight(50)
     assert approx(robot.chassis.travel_mm - travel, 50, 1.5)
     assert approx(robot.chassis.heading_deg, heading, 0.5)
@@ -187,14 +230,10 @@ def test_a_second_drive_base_over_the_same_wheels_reuses_their_slots():
     robot = ServoRobot()
     robot.drivebase()
     db = robot.drivebase()
-    assert len(robot.engine().slots) == 2
+    assert (robot.left.slot, robot.right.slot) == (0, 1)
+    assert robot.engine().stats(1)[0] > 0
     db.straight(100)
     assert approx(robot.chassis.x_mm, 100, 2)
-
-
-def test_the_engine_is_only_installed_for_these_tests():
-    serial_bus_engine.uninstall()
-    assert not hasattr(_openbricks_native, "serial_bus")
 
 
 def test_brake_and_hold_on_an_adopted_wheel_are_allowed_during_an_estop():

@@ -18,5 +18,7 @@ int ob_py_add_scs(PyObject *module);
 int ob_py_add_imu_yaw(PyObject *module);
 /* MotorIO and the _C_API capsule; needs the scheduler added first. */
 int ob_py_add_capi(PyObject *module);
+/* SerialBus and serial_bus(); needs the scheduler and MotorIO added first. */
+int ob_py_add_serial_bus(PyObject *module);
 
 #endif /* OB_PY_BINDINGS_H */

@@ -22,6 +22,8 @@
 #include <stdint.h>
 
 #define OB_PY_CAPI_CAPSULE "openbricks_native._C_API"
+/* A native byte wire for SerialBus(uart): a capsule of this name holding an ob_uart_t (uart.h). */
+#define OB_UART_CAPSULE "openbricks_native.uart"
 /* Bumped whenever a member changes meaning; members are only ever appended. */
 #define OB_PY_CAPI_VERSION 1u
 

@@ -32,6 +32,8 @@ static const mp_rom_map_elem_t mod_globals_table[] = {
     {MP_ROM_QSTR(MP_QSTR_DriveBase), MP_ROM_PTR(&ob_mp_drivebase_type)},
     {MP_ROM_QSTR(MP_QSTR_ImuYaw), MP_ROM_PTR(&ob_mp_imu_yaw_type)},
     {MP_ROM_QSTR(MP_QSTR_scs), MP_ROM_PTR(&ob_mp_scs_module)},
+    {MP_ROM_QSTR(MP_QSTR_SerialBus), MP_ROM_PTR(&ob_mp_serial_bus_type)},
+    {MP_ROM_QSTR(MP_QSTR_serial_bus), MP_ROM_PTR(&ob_mp_serial_bus_obj)},
     {MP_ROM_QSTR(MP_QSTR_interrupt_main), MP_ROM_PTR(&mod_interrupt_main_obj)},
     #if defined(ESP_PLATFORM)
     {MP_ROM_QSTR(MP_QSTR_ticks_itself), MP_ROM_TRUE},

@@ -83,6 +83,15 @@ extern const mp_obj_type_t ob_mp_servo_type;
 extern const mp_obj_type_t ob_mp_drivebase_type;
 extern const mp_obj_type_t ob_mp_imu_yaw_type;
 extern const mp_obj_module_t ob_mp_scs_module;
+extern const mp_obj_type_t ob_mp_serial_bus_type;
+/* serial_bus(uart_id, tx=None, rx=None, baud=1000000, dir_pin=None) -> SerialBus (mp_serial_bus.c). */
+extern const mp_obj_fun_builtin_var_t ob_mp_serial_bus_obj;
+
+#if defined(ESP_PLATFORM)
+#include "uart.h"
+/* The hub's UART uart_id on the ESP-IDF driver, as the engine's wire (mp_uart_esp32.c); raises on failure. */
+const ob_uart_t *ob_mp_uart_esp32_open(int uart_id, mp_obj_t tx, mp_obj_t rx, uint32_t baud, mp_obj_t dir_pin);
+#endif
 
 /* The module's motor_process (created on first use; see mp_scheduler.c). */
 mp_obj_t ob_mp_motor_process_get(void);

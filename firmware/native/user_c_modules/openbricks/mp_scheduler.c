@@ -119,9 +119,9 @@ static void release_slot(motor_process_obj_t *self, slot_t *slot) {
     slot->native = NULL;
 }
 
-/* The native part of a Servo or DriveBase (or of a Python subclass of one), or NULL. */
+/* The native part of a Servo, DriveBase or SerialBus (or of a Python subclass of one), or NULL. */
 static ob_mp_subscriber_t *as_subscriber(mp_obj_t obj) {
-    static const mp_obj_type_t *const natives[] = {&ob_mp_servo_type, &ob_mp_drivebase_type};
+    static const mp_obj_type_t *const natives[] = {&ob_mp_servo_type, &ob_mp_drivebase_type, &ob_mp_serial_bus_type};
     for (size_t i = 0; i < MP_ARRAY_SIZE(natives); i++) {
         mp_obj_t base = mp_obj_cast_to_native_base(obj, MP_OBJ_FROM_PTR(natives[i]));
         if (base != MP_OBJ_NULL) {

@@ -1,0 +1,134 @@
+/*
+ * The serial-bus engine: the hub's side of one UART of Feetech SCS servos
+ * (ST-3032 wheels, ST-3215 arms) once a DriveBase adopted them.
+ *
+ * Each adopted servo gets a slot. The servo is switched to its open-loop duty
+ * mode and multi-turn position reporting, and from then on the engine, ticked
+ * at 1 kHz by motor_process, does its bus work:
+ *
+ *   1. one SYNC WRITE of every driven slot's duty (goal time register), so
+ *      both wheels change at the same packet boundary, and one SYNC WRITE of
+ *      torque enable for the slots that started or stopped coasting;
+ *   2. position, speed and load reads (one 6-byte READ per slot), round robin
+ *      from where the last tick stopped, as many as fit in the tick's bus
+ *      budget; a failed read is retried once when the budget allows.
+ *
+ * A slot's motor IO (ob_motor_io_t, in the adopting motor's user frame, its
+ * invert applied) is what a DriveBase or Servo core drives: read_angle gives
+ * the latest multi-turn angle and fails while the servo's last read failed,
+ * write_duty and write_coast set what the next tick sends. So the control
+ * loop runs on the tick with no Python, on the hub and in the simulator.
+ *
+ * A servo that stops answering shows in its counters: replies, failed reads
+ * and failed reads in a row; after OB_SERIAL_BUS_SILENT_READS failures in a
+ * row its angle, speed and load read as unavailable, which the runtime turns
+ * into the manual's "not responding on the bus" error naming the motor.
+ * Garbage, truncated replies and a wrong id answering cost a failed read,
+ * never more than the read's deadline.
+ */
+#ifndef OB_SERIAL_BUS_H
+#define OB_SERIAL_BUS_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "ob_types.h"
+#include "uart.h"
+
+#define OB_SERIAL_BUS_MAX_SLOTS 8
+#define OB_SERIAL_BUS_COUNTS_PER_REV 4096
+/* Failed reads in a row after which a slot counts as silent. */
+#define OB_SERIAL_BUS_SILENT_READS 3u
+/* Bus time the tick may spend, out of its 1000 us. */
+#define OB_SERIAL_BUS_TICK_BUDGET_US 900u
+/* How long a reply may take to complete after its request left the wire (a 12-byte reply is 120 us). */
+#define OB_SERIAL_BUS_REPLY_TIMEOUT_US 300u
+/* Attempts of the transactions run outside the tick (adopt, release). */
+#define OB_SERIAL_BUS_ATTEMPTS 3
+#define OB_SERIAL_BUS_DEFAULT_BAUD 1000000u
+
+typedef enum {
+    OB_SERIAL_BUS_OK = 0,
+    OB_SERIAL_BUS_E_ID = -1,       /* servo id outside 0..253 */
+    OB_SERIAL_BUS_E_FULL = -2,     /* every slot is taken */
+    OB_SERIAL_BUS_E_ADOPTED = -3,  /* the servo already has a slot */
+    OB_SERIAL_BUS_E_SILENT = -4,   /* the servo did not answer */
+    OB_SERIAL_BUS_E_SLOT = -5,     /* not an adopted slot */
+    OB_SERIAL_BUS_E_COUNTS = -6,   /* counts_per_rev other than the servo's 4096 */
+} ob_serial_bus_error_t;
+
+struct ob_serial_bus;
+
+typedef struct {
+    struct ob_serial_bus *bus;
+    uint8_t servo_id;
+    bool adopted;
+    float sign; /* -1 when the adopting motor is inverted */
+    /* What the next tick sends. */
+    bool driven;    /* torque on, at duty_pct; false: coasting */
+    float duty_pct; /* user frame, -100..100 */
+    /* What the servo was told last (torque enable). */
+    bool torque_known;
+    bool torque_on;
+    /* Feedback. */
+    bool have_reading;
+    int32_t last_raw; /* present position as the servo reported it */
+    int32_t counts;   /* multi-turn, servo frame, since adoption */
+    float speed_dps;  /* user frame */
+    float load_pct;   /* user frame, percent of stall */
+    uint8_t status;   /* error flags of the servo's last reply */
+    uint32_t replies;
+    uint32_t failed_reads;
+    uint32_t failed_in_a_row;
+} ob_serial_bus_slot_t;
+
+typedef struct ob_serial_bus {
+    ob_uart_t uart;
+    uint32_t byte_us;
+    uint32_t budget_us;
+    uint32_t reply_timeout_us;
+    ob_serial_bus_slot_t slots[OB_SERIAL_BUS_MAX_SLOTS];
+    int n_slots;   /* slots handed out so far; numbers are never reused */
+    int next_read; /* round robin: the slot the next tick reads first */
+    /* Counters of the engine as a whole. */
+    uint32_t ticks;
+    uint32_t last_tick_bus_us; /* wire time the last tick used */
+    uint64_t bus_us_total;
+    uint32_t garbage_frames; /* frames dropped: bad checksum, wrong id, wrong length */
+} ob_serial_bus_t;
+
+/* An engine over uart at baud, with no slots. */
+void ob_serial_bus_init(ob_serial_bus_t *bus, const ob_uart_t *uart, uint32_t baud);
+
+/*
+ * Take servo_id onto the engine: ping it, switch it to duty mode with torque
+ * off and multi-turn positions, read its position once. On success *slot is
+ * its slot number and the servo coasts until its IO is driven.
+ */
+ob_serial_bus_error_t ob_serial_bus_adopt(ob_serial_bus_t *bus, int servo_id, bool invert, int *slot);
+
+/* Coast the servo, switch it back to wheel mode and free its slot (the number is not reused). */
+ob_serial_bus_error_t ob_serial_bus_release(ob_serial_bus_t *bus, int slot);
+
+/* The slot's state, or NULL when slot is not adopted. */
+ob_serial_bus_slot_t *ob_serial_bus_slot(ob_serial_bus_t *bus, int slot);
+
+/* The slot's motor IO (user frame); its ctx is the slot. */
+ob_motor_io_t ob_serial_bus_motor_io(ob_serial_bus_slot_t *slot);
+
+/* False while the slot is silent (OB_SERIAL_BUS_SILENT_READS failures in a row) or never read. */
+bool ob_serial_bus_answering(const ob_serial_bus_slot_t *slot);
+
+/* Multi-turn angle in degrees, user frame. */
+float ob_serial_bus_angle_deg(const ob_serial_bus_slot_t *slot);
+
+/* True when some slot is adopted (the engine has bus work to do each tick). */
+bool ob_serial_bus_active(const ob_serial_bus_t *bus);
+
+/* One tick's bus work (an ob_tick_fn_t; ctx is the engine). */
+void ob_serial_bus_tick(void *ctx, uint32_t now_ms);
+
+/* Text for an ob_serial_bus_error_t, for the bindings' messages. */
+const char *ob_serial_bus_strerror(ob_serial_bus_error_t error);
+
+#endif /* OB_SERIAL_BUS_H */
