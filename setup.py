@@ -41,9 +41,16 @@ setup(
         # DIR on PYTHONPATH. It needs no MuJoCo headers: it reaches mjData through the Python bindings.
         Extension(
             "openbricks_mjcontrol",
-            sources=sorted(glob("sim/native/*.c")),
-            include_dirs=[NATIVE, f"{NATIVE}/bindings/cpython"],
-            depends=[f"{NATIVE}/ob_types.h", *sorted(glob(f"{NATIVE}/bindings/cpython/py_*.h"))],
+            # The emulated servo bus parses and answers packets with the firmware's own codec.
+            sources=[*sorted(glob("sim/native/*.c")), f"{NATIVE}/scs.c"],
+            include_dirs=[NATIVE, f"{NATIVE}/bindings/cpython", "sim/native"],
+            depends=[
+                f"{NATIVE}/ob_types.h",
+                f"{NATIVE}/scs.h",
+                f"{NATIVE}/uart.h",
+                *sorted(glob("sim/native/*.h")),
+                *sorted(glob(f"{NATIVE}/bindings/cpython/py_*.h")),
+            ],
             extra_compile_args=["-O2", "-std=gnu99", "-Wall", "-Wextra", "-Wno-missing-field-initializers"],
         ),
         # The simulator's Python-time charge (sim/python_cost.py): a C profile function, because a

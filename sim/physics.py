@@ -146,6 +146,11 @@ class Physics:
         self.controller = controller
         return controller
 
+    def servo_wire(self):
+        """An emulated serial-bus wire on this robot's control path: servos attached to it answer the
+        firmware's bus engine in SCS packets with 1 Mbaud half-duplex byte timing on simulated time."""
+        return _native_control().ServoWire(self.attach_control())
+
     def wheel_io(self, index: int, sign: int = 1, counts_per_rev=None):
         """A native motor IO onto wheel `index` (0 left, 1 right) in a frame mirrored by sign."""
         openbricks_mjcontrol = _native_control()

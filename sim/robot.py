@@ -65,11 +65,10 @@ class SerialBusWiring:
             )
         board.attach_uart(SERVO_UART, self.bus)
         self._physics = physics
-        self.engine = BusEngine(self.bus, self._engine_io, f"UART{SERVO_UART} tx=14 rx=41")
-
-    def _engine_io(self, servo, invert):
-        io = servo.io  # the shaft: its wheel, and how the servo is mounted on it
-        return self._physics.wheel_io(io.wheel, io.sign * (-1 if invert else 1))
+        # The firmware's C engine over the emulated 1 Mbaud wire. A servo answers there once adopted,
+        # driving the shaft it is mounted on (EmulatedServo.io, set by place_wheels below): that
+        # mount is the one place a servo id meets a wheel.
+        self.engine = BusEngine(self.bus, physics.servo_wire())
 
     def place_wheels(self, left, right):
         """Mount the servos the program's DriveBase names: `left`/`right` = ((uart_id, servo_id), invert).

@@ -14,10 +14,13 @@ ramp, mode 2 is open-loop duty, mode 3 moves by relative steps and holds,
 position mode moves to a goal. No Python runs per millisecond.
 
 `BusEngine` is what `_openbricks_native.serial_bus(uart_id)` returns in the
-simulator (see sim_arch.md for the contract the firmware's C engine shares):
-when a DriveBase adopts its two wheels it takes the servos into duty mode and
-drives them through native wheel IO, so the drivebase controller runs inside
-the physics step too.
+simulator: the firmware's own C engine (`openbricks_native.SerialBus`) over
+the emulated wire of the adopted servos (`openbricks_mjcontrol.ServoWire`),
+with the byte timing of a 1 Mbaud half-duplex line. Adopting a servo moves it
+from the Python register emulation onto that wire (its own loop stands down,
+as a real servo's does in duty mode); from then on every millisecond the
+engine sync-writes duties and reads positions in SCS packets, inside the
+physics step, with no Python call.
 
 Register units (STS memory map): position in encoder steps (4096 per turn),
 speed in steps/s, acceleration in 100 steps/s^2, load and torque limit in
@@ -92,7 +95,7 @@ class EmulatedServo:
         self.no_load_dps = no_load_dps
         self.stall_torque_nm = stall_torque_nm
         self.silent = False  # unplugged: answers nothing
-        self.adopted_by = None  # the BusEngine driving this servo's bridge directly
+        self.adopted_by = None  # the engine's wire (ServoWire) this servo answers on while adopted
         self._world = world_process
         self._target_steps = 0.0  # position / step mode destination, shaft steps
         self.servo = None
@@ -136,7 +139,7 @@ class EmulatedServo:
         self.silent = bool(silent)
         self.io.silent = self.silent
         if self.adopted_by is not None:
-            self.adopted_by._slot_of(self).silent = self.silent
+            self.adopted_by.set_silent(self.servo_id, self.silent)
 
     # --- registers -------------------------------------------------------------------------
 
@@ -196,7 +199,7 @@ class EmulatedServo:
             return address < register + width and register < end
 
         if self.adopted_by is not None:
-            return  # the engine owns the bridge; registers are kept but not acted on
+            return  # on the engine's wire; registers are kept but not acted on
         if touched(REG_TORQUE_LIMIT, 2) or touched(REG_ACC) or touched(REG_GOAL_SPEED, 2):
             self._configure()
         if touched(REG_MODE):
@@ -242,15 +245,18 @@ class EmulatedServo:
 
     # --- adoption ----------------------------------------------------------------------------
 
-    def hand_to(self, engine):
-        """The engine drives the bridge directly (duty mode); the servo's own loop stands down."""
+    def hand_to(self, wire):
+        """Answer on the bus engine's wire from now on (duty mode); the servo's own loop stands down."""
         self._world.unsubscribe(self.servo)
-        self.adopted_by = engine
+        self.servo.coast()
+        wire.attach(self.servo_id, self.io)
+        self.adopted_by = wire
         self.regs[REG_MODE] = MODE_DUTY
-        self.regs[REG_TORQUE_ENABLE] = 1
 
     def take_back(self):
         """Back to register control, coasting in wheel mode, as after a power cycle of the engine."""
+        if self.adopted_by is not None:
+            self.adopted_by.detach(self.servo_id)
         self.adopted_by = None
         self.regs[REG_MODE] = MODE_WHEEL
         self.regs[REG_TORQUE_ENABLE] = 0
@@ -345,78 +351,50 @@ class ServoBus:
 class BusEngine:
     """The serial-bus engine a DriveBase hands its wheels to (`_openbricks_native.serial_bus(uart_id)`).
 
-    Slots are small integers in adoption order. Each adopted servo runs in
-    open-loop duty mode driven by its slot's native motor IO, in the
-    adopting motor's user frame (its invert applied); angles are multi-turn
-    degrees, quantised to the encoder.
+    The contract is the C engine's (docs/architecture.md); this class only moves each servo onto the
+    engine's wire when it is adopted, and back to the register emulation when it is released.
     """
 
-    def __init__(self, bus, make_io, where):
+    def __init__(self, bus, wire):
         self._bus = bus
-        self._make_io = make_io  # (servo, invert) -> a native wheel IO in the motor's user frame
-        self._where = where
-        self._slots = []  # [EmulatedServo, io] or None once released
+        self._wire = wire
+        self._engine = openbricks_native.SerialBus(wire.uart())
+        self._servos = {}  # slot -> EmulatedServo
 
     def adopt(self, servo_id, invert=False, counts_per_rev=STEPS_PER_REV):
-        """Take servo `servo_id` onto the engine and return its slot."""
+        """Take servo `servo_id` onto the engine and return its slot (the engine pings it on the wire)."""
         servo = self._bus.servos.get(servo_id)
-        if servo is None or servo.silent:
-            from openbricks.drivers.st3215 import not_responding_message
-
-            raise OSError(
-                not_responding_message(f"servo id {servo_id}", servo_id, None, self._where, 0, 1, 1)
-            )
-        if servo.adopted_by is not None:
-            raise ValueError(
-                f"servo id {servo_id} on {self._where} is already adopted "
-                f"(slot {self._slot_of_index(servo)}); release() it first"
-            )
-        if counts_per_rev != STEPS_PER_REV:
-            raise ValueError(f"counts_per_rev={counts_per_rev!r}: an ST-3032/ST-3215 encoder has 4096 counts")
-        io = self._make_io(servo, bool(invert))
-        servo.hand_to(self)
-        io.coast()
-        self._slots.append([servo, io])
-        return len(self._slots) - 1
-
-    def _slot_of_index(self, servo):
-        for i, entry in enumerate(self._slots):
-            if entry is not None and entry[0] is servo:
-                return i
-        return None
-
-    def _slot_of(self, servo):
-        return self._slots[self._slot_of_index(servo)][1]
-
-    def _io(self, slot):
-        if not isinstance(slot, int) or not 0 <= slot < len(self._slots) or self._slots[slot] is None:
-            raise ValueError(f"slot {slot!r} is not an adopted servo on {self._where}")
-        return self._slots[slot][1]
-
-    def motor_io(self, slot):
-        """The slot's native motor IO: DriveBase(left_io=..., right_io=...) drives the wheel through it."""
-        return self._io(slot)
-
-    def angle_deg(self, slot):
-        """Multi-turn angle in the motor's user frame, or None while the servo is silent."""
-        return self._io(slot).read_angle()
-
-    def speed_dps(self, slot):
-        return self._io(slot).speed_dps
-
-    def load_pct(self, slot):
-        """Output effort as a percentage of stall torque, signed in the user frame."""
-        io = self._io(slot)
-        return 100.0 * io.torque_nm / self._slots[slot][0].stall_torque_nm
-
-    def stats(self, slot):
-        """(replies, failed_reads, failed_in_a_row) of the engine's angle reads on this slot."""
-        return self._io(slot).stats
+        handed = servo is not None and servo.adopted_by is None and not servo.silent
+        if handed:
+            servo.hand_to(self._wire)
+        try:
+            slot = self._engine.adopt(servo_id, invert=invert, counts_per_rev=counts_per_rev)
+        except BaseException:
+            if handed:
+                servo.take_back()
+            raise
+        self._servos[slot] = servo
+        return slot
 
     def release(self, slot):
-        """Give the servo back to register control (coasting); the slot number is not reused."""
-        io = self._io(slot)
-        io.coast()
-        servo = self._slots[slot][0]
-        self._slots[slot] = None
-        servo.take_back()
+        """Give the servo back to register control (coasting); the engine may reuse the slot later."""
+        self._engine.release(slot)
+        self._servos.pop(slot).take_back()
+
+    def motor_io(self, slot):
+        return self._engine.motor_io(slot)
+
+    def angle_deg(self, slot):
+        return self._engine.angle_deg(slot)
+
+    def speed_dps(self, slot):
+        return self._engine.speed_dps(slot)
+
+    def load_pct(self, slot):
+        return self._engine.load_pct(slot)
+
+    def stats(self, slot):
+        return self._engine.stats(slot)
+
+    def bus_stats(self):
+        return self._engine.bus_stats()

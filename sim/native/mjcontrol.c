@@ -33,45 +33,11 @@
 #include <math.h>
 #include <stdint.h>
 
-#include "ob_types.h"
-#include "py_capi.h"
-#include "py_motor_io.h"
-
-#define MAX_WHEELS 8
-#define RAD_TO_DEG (180.0 / 3.14159265358979323846)
+#include "mjcontrol.h"
 
 static const ob_py_capi_t *capi;
 
 /* ---- Controller ---------------------------------------------------------------------------- */
-
-typedef struct {
-    const double *qpos; /* joint angle, rad, inside mjData */
-    const double *qvel; /* joint speed, rad/s */
-    double *ctrl;       /* the joint's torque actuator, N m */
-    double stall_torque_nm;
-    double inv_no_load_rad_s;
-    double torque_scale; /* 1.0; below 1 models a weak motor or a dragging gearbox */
-    int coasting;
-    double duty; /* -1..1 in the joint frame; duty 0 shorts the winding (brake) */
-    double torque_nm; /* written last step */
-} wheel_t;
-
-typedef struct {
-    PyObject_HEAD
-    PyObject *model;
-    PyObject *data;
-    PyObject *step_args; /* (model, data) for mujoco.mj_step */
-    PyObject *mj_step;
-    PyObject *world; /* MotorProcess of the simulated devices, or NULL */
-    void *data_address;
-    double *qpos, *qvel, *ctrl;
-    Py_ssize_t nq, nv, nu;
-    wheel_t wheels[MAX_WHEELS];
-    int n_wheels;
-    uint64_t now_ms; /* simulated milliseconds: one per controlled step */
-    long armed;      /* steps the callback may still run in the current step() */
-    PyObject *error_type, *error_value, *error_tb; /* first tick error of the current step() */
-} ControllerObject;
 
 static ControllerObject *active; /* the controller the callback serves (strong reference) */
 
@@ -453,20 +419,6 @@ static PyTypeObject ControllerType = {
 
 /* ---- WheelIO -------------------------------------------------------------------------------- */
 
-typedef struct {
-    ob_py_motor_io_t base;
-    ControllerObject *owner;
-    wheel_t *wheel;
-    int index;
-    double sign;          /* +1: this IO's positive is the joint's positive */
-    double counts_per_rad;
-    double deg_per_count;
-    int silent;           /* an unplugged motor: no readings, commands ignored */
-    unsigned long replies;
-    unsigned long failed;
-    unsigned long failed_in_a_row;
-} WheelIOObject;
-
 static bool wheel_read_angle(void *ctx, float *angle_deg) {
     WheelIOObject *self = ctx;
     if (self->silent) {
@@ -686,7 +638,7 @@ static PyGetSetDef wio_getset[] = {
     {NULL, NULL, NULL, NULL, NULL},
 };
 
-static PyTypeObject WheelIOType = {
+PyTypeObject WheelIOType = {
     PyVarObject_HEAD_INIT(NULL, 0)
     .tp_name = "openbricks_mjcontrol.WheelIO",
     .tp_basicsize = sizeof(WheelIOObject),
@@ -745,7 +697,7 @@ PyMODINIT_FUNC PyInit_openbricks_mjcontrol(void) {
         return NULL;
     }
     if (PyModule_AddObjectRef(m, "Controller", (PyObject *)&ControllerType) < 0 ||
-        PyModule_AddObjectRef(m, "WheelIO", (PyObject *)&WheelIOType) < 0) {
+        PyModule_AddObjectRef(m, "WheelIO", (PyObject *)&WheelIOType) < 0 || ob_sim_add_servo_wire(m) < 0) {
         Py_DECREF(m);
         return NULL;
     }

@@ -1,5 +1,6 @@
 """The emulated serial bus: the unchanged ST3032Motor driver against servos whose loops run natively
-on the simulated wheels, and the engine a DriveBase adopts the wheels onto."""
+on the simulated wheels, and the firmware's C engine a DriveBase adopts the wheels onto, talking to
+them over an emulated wire with 1 Mbaud half-duplex byte timing."""
 
 import pytest
 
@@ -96,6 +97,25 @@ def test_an_adopted_pair_runs_a_native_drivebase_from_the_bus_engine(sim):
     assert engine.angle_deg(right_slot) == pytest.approx(engine.angle_deg(left_slot), abs=2.0)
     replies, failed, in_a_row = engine.stats(left_slot)
     assert replies >= 3000 and failed == 0 and in_a_row == 0
+
+
+def test_the_engine_speaks_scs_packets_on_the_wire_with_real_byte_timing(sim):
+    import _openbricks_native
+
+    engine = _openbricks_native.serial_bus(1)
+    left_slot, right_slot = engine.adopt(1), engine.adopt(2, invert=True)
+    engine.motor_io(left_slot).write_duty(30)
+    engine.motor_io(right_slot).write_duty(30)
+    wire = sim.wiring.engine._wire
+    busy_before, packets_before = wire.stats["line_busy_us"], wire.stats["packets"]
+    sim.clock.advance_us(500_000)
+    # Each millisecond: one 14-byte sync write of both duties and two 8-byte reads answered in 12 bytes.
+    assert wire.stats["packets"] - packets_before == pytest.approx(3 * 500, abs=6)
+    busy_per_ms = (wire.stats["line_busy_us"] - busy_before) / 500
+    assert busy_per_ms == pytest.approx(140 + 2 * (80 + 120), abs=2)
+    assert 540 <= engine.bus_stats()["last_tick_bus_us"] <= 1000  # the reply delays count too
+    pose = sim.physics.pose()
+    assert pose.x_mm > 20, "30 % duty on both wheels drives the robot forward"
 
 
 def test_unplugging_an_adopted_servo_counts_failed_reads_and_trips_the_watchdog(sim):
