@@ -30,7 +30,11 @@ setup(
     ext_modules=[
         Extension(
             "openbricks_native",
-            sources=sorted(glob(f"{NATIVE}/*.c")) + sorted(glob(f"{NATIVE}/bindings/cpython/*.c")),
+            sources=[
+                *sorted(glob(f"{NATIVE}/*.c")),
+                f"{NATIVE}/platform/hard_timer_posix.c",  # the hard tick's timer on a host
+                *sorted(glob(f"{NATIVE}/bindings/cpython/*.c")),
+            ],
             include_dirs=[NATIVE, f"{NATIVE}/bindings/cpython"],
             depends=sorted(glob(f"{NATIVE}/*.h")) + sorted(glob(f"{NATIVE}/bindings/cpython/*.h")),
             extra_compile_args=["-O2", "-std=gnu99", "-Wall", "-Wextra", "-Wno-missing-field-initializers"],

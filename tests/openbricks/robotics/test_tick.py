@@ -47,3 +47,10 @@ def test_a_runtime_that_ticks_motor_process_itself_gets_no_second_tick():
     finally:
         sys.modules["_openbricks_native"] = _openbricks_native
     assert _ticks_during(50) == 0  # (nothing below Python ticks it in this test process)
+
+
+def test_the_hard_tick_below_python_passes_its_self_test():
+    # Real time, not the test clock: the hard tick is the platform's 1 kHz timer (a thread on a host).
+    ticks, expected = _openbricks_native.motor_process.hard_tick_selftest(duration_ms=50)
+    assert abs(ticks - expected) <= expected // 10
+    assert _openbricks_native.motor_process.hard_tick_count() >= ticks

@@ -21,4 +21,8 @@ int ob_py_add_capi(PyObject *module);
 /* SerialBus and serial_bus(); needs the scheduler and MotorIO added first. */
 int ob_py_add_serial_bus(PyObject *module);
 
+/* motor_process.hard_tick_count() / hard_tick_selftest(duration_ms=100) (py_hard_tick.c). */
+PyObject *ob_py_hard_tick_count(PyObject *self, PyObject *unused);
+PyObject *ob_py_hard_tick_selftest(PyObject *self, PyObject *args, PyObject *kwargs);
+
 #endif /* OB_PY_BINDINGS_H */

@@ -319,6 +319,11 @@ static PyMethodDef mp_methods[] = {
     {"reset", (PyCFunction)mp_reset, METH_NOARGS,
      "Unsubscribe everything and forget the clock (the runtime does this between programs)."},
     {"subscribers", (PyCFunction)mp_subscribers, METH_NOARGS, "The subscribers, in tick order."},
+    {"hard_tick_count", (PyCFunction)ob_py_hard_tick_count, METH_NOARGS,
+     "Hard ticks (the 1 kHz timer below the interpreter) delivered since it started."},
+    {"hard_tick_selftest", (PyCFunction)(void (*)(void))ob_py_hard_tick_selftest, METH_VARARGS | METH_KEYWORDS,
+     "hard_tick_selftest(duration_ms=100) -> (ticks, expected): run the hard tick for a while and check its "
+     "rate; RuntimeError naming the counts when it is off by more than 10 %."},
     {NULL, NULL, 0, NULL},
 };
 

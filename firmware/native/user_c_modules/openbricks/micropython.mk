@@ -7,4 +7,6 @@ OB_NATIVE_DIR := $(realpath $(USERMOD_DIR)/../..)
 
 SRC_USERMOD_C += $(wildcard $(USERMOD_DIR)/*.c)
 SRC_USERMOD_LIB_C += $(wildcard $(OB_NATIVE_DIR)/*.c)
+# The hard tick's timer: a POSIX thread on the unix port (the ESP32 build uses esp_timer instead).
+SRC_USERMOD_LIB_C += $(OB_NATIVE_DIR)/platform/hard_timer_posix.c
 CFLAGS_USERMOD += -I$(USERMOD_DIR) -I$(OB_NATIVE_DIR)

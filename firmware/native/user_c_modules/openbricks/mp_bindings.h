@@ -86,6 +86,9 @@ extern const mp_obj_module_t ob_mp_scs_module;
 extern const mp_obj_type_t ob_mp_serial_bus_type;
 /* serial_bus(uart_id, tx=None, rx=None, baud=1000000, dir_pin=None) -> SerialBus (mp_serial_bus.c). */
 extern const mp_obj_fun_builtin_var_t ob_mp_serial_bus_obj;
+/* motor_process.hard_tick_count() / hard_tick_selftest(duration_ms=100) (mp_hard_tick.c). */
+extern const mp_obj_fun_builtin_fixed_t ob_mp_hard_tick_count_obj;
+extern const mp_obj_fun_builtin_var_t ob_mp_hard_tick_selftest_obj;
 
 #if defined(ESP_PLATFORM)
 #include "uart.h"

@@ -419,6 +419,8 @@ static const mp_rom_map_elem_t motor_process_locals_table[] = {
     {MP_ROM_QSTR(MP_QSTR_now_ms), MP_ROM_PTR(&motor_process_now_ms_obj)},
     {MP_ROM_QSTR(MP_QSTR_reset), MP_ROM_PTR(&motor_process_reset_obj)},
     {MP_ROM_QSTR(MP_QSTR_subscribers), MP_ROM_PTR(&motor_process_subscribers_obj)},
+    {MP_ROM_QSTR(MP_QSTR_hard_tick_count), MP_ROM_PTR(&ob_mp_hard_tick_count_obj)},
+    {MP_ROM_QSTR(MP_QSTR_hard_tick_selftest), MP_ROM_PTR(&ob_mp_hard_tick_selftest_obj)},
     {MP_ROM_QSTR(MP_QSTR___del__), MP_ROM_PTR(&motor_process_del_obj)},
 };
 static MP_DEFINE_CONST_DICT(motor_process_locals, motor_process_locals_table);

@@ -1,0 +1,42 @@
+/*
+ * The hard tick: a 1 kHz periodic callback below the interpreter, for what
+ * must run every millisecond whatever Python is doing (the serial-bus engine
+ * over the hub's UART).
+ *
+ * The platform delivers the period (hard_timer.h: ESP-IDF's esp_timer on the
+ * hub, a POSIX thread on host builds) and calls ob_hard_tick_fire() from its
+ * own context; this file keeps the count and the verdict of the self-test
+ * the manual names (motor_process.hard_tick_selftest() / hard_tick_count()).
+ * Nothing here may allocate, block or call the interpreter.
+ */
+#ifndef OB_HARD_TICK_H
+#define OB_HARD_TICK_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#define OB_HARD_TICK_PERIOD_US 1000u
+/* A self-test passes when at least this share of the expected ticks arrived (and no more than 1/share). */
+#define OB_HARD_TICK_MIN_SHARE_PCT 90u
+/* How long a self-test lets a timer it just started run before counting. */
+#define OB_HARD_TICK_SETTLE_MS 5u
+/* How long a self-test waits for ticks a busy host's timer thread still owes (0 lost, some late). */
+#define OB_HARD_TICK_GRACE_MS 100u
+
+typedef struct {
+    volatile uint32_t count; /* ticks delivered since the hard tick started */
+    bool running;
+} ob_hard_tick_t;
+
+void ob_hard_tick_init(ob_hard_tick_t *tick);
+
+/* One period elapsed: called by the platform timer, in its context. */
+void ob_hard_tick_fire(ob_hard_tick_t *tick);
+
+/* Ticks a 1 kHz tick should deliver in elapsed_us. */
+uint32_t ob_hard_tick_expected(uint32_t elapsed_us);
+
+/* True when `ticks` counted over elapsed_us is a working 1 kHz tick (within OB_HARD_TICK_MIN_SHARE_PCT). */
+bool ob_hard_tick_rate_ok(uint32_t ticks, uint32_t elapsed_us);
+
+#endif /* OB_HARD_TICK_H */

@@ -1,0 +1,64 @@
+/*
+ * motor_process.hard_tick_count() and hard_tick_selftest() (host: py_hard_tick.c).
+ *
+ * The hard tick (hard_tick.h) runs on ESP-IDF's esp_timer on the hub
+ * (mp_hard_timer_esp32.c) and on a POSIX thread in the unix port
+ * (platform/hard_timer_posix.c); either way it never touches the VM.
+ */
+#include "hard_tick.h"
+#include "hard_timer.h"
+#include "mp_bindings.h"
+#include "py/mphal.h"
+
+static ob_hard_tick_t hard_tick;
+
+static void fire(void *ctx) {
+    ob_hard_tick_fire(ctx);
+}
+
+static mp_obj_t hard_tick_count(mp_obj_t self_in) {
+    (void)self_in;
+    return mp_obj_new_int_from_uint(hard_tick.count);
+}
+MP_DEFINE_CONST_FUN_OBJ_1(ob_mp_hard_tick_count_obj, hard_tick_count);
+
+static mp_obj_t hard_tick_selftest(size_t n_args, const mp_obj_t *pos_args, mp_map_t *kw_args) {
+    enum { ARG_duration_ms };
+    static const mp_arg_t allowed[] = {
+        {MP_QSTR_duration_ms, MP_ARG_INT, {.u_int = 100}},
+    };
+    mp_arg_val_t vals[MP_ARRAY_SIZE(allowed)];
+    mp_arg_parse_all(n_args - 1, pos_args + 1, kw_args, MP_ARRAY_SIZE(allowed), allowed, vals);
+    mp_int_t duration_ms = vals[ARG_duration_ms].u_int;
+    if (duration_ms < 10 || duration_ms > 10000) {
+        mp_raise_msg_varg(&mp_type_ValueError, MP_ERROR_TEXT("hard_tick_selftest(duration_ms=%d): give 10..10000 ms"),
+                          (int)duration_ms);
+    }
+    if (!hard_tick.running) {
+        if (!ob_hard_timer_start(fire, &hard_tick, OB_HARD_TICK_PERIOD_US)) {
+            mp_raise_msg(&mp_type_OSError, MP_ERROR_TEXT("hard_tick_selftest: the 1 kHz hard timer could not be started"));
+        }
+        hard_tick.running = true;
+        mp_hal_delay_ms(OB_HARD_TICK_SETTLE_MS); /* a timer just started counts from its first period */
+    }
+    uint32_t count0 = hard_tick.count;
+    uint32_t start_us = ob_hard_timer_now_us();
+    mp_hal_delay_ms((mp_uint_t)duration_ms);
+    uint32_t elapsed_us = ob_hard_timer_now_us() - start_us;
+    uint32_t ticks = hard_tick.count - count0;
+    /* A host's timer thread may wait for a core and then deliver what it owes: give it that long. */
+    for (uint32_t waited = 0; !ob_hard_tick_rate_ok(ticks, elapsed_us) && waited < OB_HARD_TICK_GRACE_MS; waited++) {
+        mp_hal_delay_ms(1);
+        ticks = hard_tick.count - count0;
+    }
+    uint32_t expected = ob_hard_tick_expected(elapsed_us);
+    if (!ob_hard_tick_rate_ok(ticks, elapsed_us)) {
+        mp_raise_msg_varg(&mp_type_RuntimeError,
+                          MP_ERROR_TEXT("hard_tick_selftest: %u hard ticks in %u us, expected about %u: the 1 kHz hard "
+                                        "tick is not keeping its rate"),
+                          (unsigned)ticks, (unsigned)elapsed_us, (unsigned)expected);
+    }
+    mp_obj_t items[2] = {mp_obj_new_int_from_uint(ticks), mp_obj_new_int_from_uint(expected)};
+    return mp_obj_new_tuple(2, items);
+}
+MP_DEFINE_CONST_FUN_OBJ_KW(ob_mp_hard_tick_selftest_obj, 1, hard_tick_selftest);
