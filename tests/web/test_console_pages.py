@@ -226,8 +226,9 @@ def test_a_viewer_sees_everything_and_can_change_nothing(console, page_for):
     assert runs(console) == before
     # History and output stay readable.
     page.goto(page.url.split("#")[0] + "#/history")
-    page.locator("[data-testid=runs]").wait_for()
-    assert page.locator("[data-testid=run-row]").count() == len(before)
+    page.wait_for_function(
+        "(n) => document.querySelectorAll('[data-testid=run-row]').length === n", arg=len(runs(console))
+    )
 
 
 PAGES = [
