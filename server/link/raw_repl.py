@@ -456,7 +456,7 @@ class RawRepl:
             or reply.get("offset") != offset
             or not isinstance(text, str)
             or not (following is None or (isinstance(following, int) and following > offset))
-            or ("crc32" in reply and zlib.crc32(text.encode("utf-8", "surrogatepass")) != reply["crc32"])
+            or zlib.crc32(text.encode("utf-8", "surrogatepass")) != reply.get("crc32")
         ):
             raise ProtocolError(
                 f"{self.hub} answered {str(reply)[:80]!r} for run {index}'s log at byte {offset}: "

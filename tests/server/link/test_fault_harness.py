@@ -137,4 +137,14 @@ def test_a_log_slice_damaged_inside_its_text_is_refused():
         with pytest.raises(ProtocolError, match="damaged on the way"):
             await repl.read_run_page(1, 0)
 
+        async def without_its_crc(name, **data):
+            # Found by the 10,000-seed run: a reorder that mangled the "crc32" key skipped the check.
+            reply = await original(name, **data)
+            reply["c2rc3"] = reply.pop("crc32")
+            return reply
+
+        repl.call = without_its_crc
+        with pytest.raises(ProtocolError, match="damaged on the way"):
+            await repl.read_run_page(1, 0)
+
     asyncio.run(scenario())
