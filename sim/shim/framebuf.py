@@ -1,10 +1,11 @@
-"""MicroPython's `framebuf` for the simulated hub: the built-in module, in Python.
+"""MicroPython's `framebuf` for the simulated hub, so a program drawing on an SSD1306 (or any
+display driver built on FrameBuffer) runs unchanged in the simulator.
 
-A program drawing on an SSD1306 (or any display driver built on FrameBuffer) runs unchanged in
-the simulator. Pixel layouts, clipping, the line, ellipse and polygon rasterisers, blit with a
-transparent key and palette, scroll, and text in the built-in 8x8 font all follow MicroPython's
-extmod/modframebuf.c (MIT licence, Damien P. George), whose font (font_petme128_8x8, ASCII 32-127,
-one byte per column, bit 0 at the top) is carried below.
+The API, pixel layouts and clipping are the documented ones, because drivers write the buffer
+straight to the display. The shapes come from textbook rasterisers (Bresenham lines, the
+midpoint ellipse, an even-odd scanline polygon fill), so a line or curve can differ by a pixel
+from a real hub's; programs don't depend on that. Text keeps the documented 8x8 cells; the glyphs
+are drawn from Pillow's default font on first use, so the panel shows readable characters.
 """
 
 MONO_VLSB = 0
@@ -16,59 +17,31 @@ GS2_HMSB = 5
 GS8 = 6
 MVLSB = MONO_VLSB
 
-_BITS = {MONO_VLSB: 1, RGB565: 16, GS4_HMSB: 4, MONO_HLSB: 1, MONO_HMSB: 1, GS2_HMSB: 2, GS8: 8}
+# Row-packed formats: bits per pixel, and whether the leftmost pixel of a byte is its top bit.
+_PACKED = {MONO_HLSB: (1, True), MONO_HMSB: (1, False), GS2_HMSB: (2, False), GS4_HMSB: (4, True)}
+_FORMATS = (MONO_VLSB, RGB565, GS4_HMSB, MONO_HLSB, MONO_HMSB, GS2_HMSB, GS8)
 
-_FONT_8X8 = bytes.fromhex(
-    "00000000000000000000004f4f0000000007070000070700147f7f14147f7f1400242e6b6b3a1200006333180c666300"
-    "00327f4d4d777250000000040603010000001c3e63410000000041633e1c0000082a3e1c1c3e2a080008083e3e080800"
-    "000080e0600000000008080808080800000000606000000000406030180c0602003e7f49457f3e000040447f7f404000"
-    "00627351494f460000226349497f360000181814167f7f1000276745457d3900003e7f49497b3200000303797d070300"
-    "00367f49497f360000266f49497f3e000000002424000000000080e46400000000081c36634141000014141414141400"
-    "00414163361c080000020351590f0600003e7f414d4f2e00007c7e0b0b7e7c00007f7f49497f3600003e7f4141632200"
-    "007f7f41633e1c00007f7f4949414100007f7f0909010100003e7f41497b3a00007f7f08087f7f000000417f7f410000"
-    "002060417f3f0100007f7f1c36634100007f7f4040404000007f7f060c067f7f007f7f0e1c7f7f00003e7f41417f3e00"
-    "007f7f09090f0600001e3f21617f5e00007f7f19396f460000266f49497b32000001017f7f010100003f7f40407f3f00"
-    "001f3f60603f1f00007f7f3018307f7f0063771c1c77630000070f78780f0700006171594d47430000007f7f41410000"
-    "0002060c18306040000041417f7f000000080c06060c0800c0c0c0c0c0c0c0c0000001030604000000207454547c7800"
-    "007f7f44447c380000387c44446c280000387c44447f7f0000387c54545c580000087e7f090302000098bca4a4fc7c00"
-    "007f7f04047c78000000007d7d0000000040c08080fd7d00007f7f30386c44000000417f7f400000007c7c1830187c7c"
-    "007c7c04047c780000387c44447c380000fcfc24243c180000183c2424fcfc00007c7c04040c080000485c5454742000"
-    "04043f7f44642000003c7c40407c3c00001c3c60603c1c00001c7c3018307c1c00446c38386c4400009cbca0a0fc7c00"
-    "004464745c4c44000008083e77414100000000ffff000000004141773e0808000002030103020301aa55aa55aa55aa55"
-)
+CELL = 8  # text() puts each character in an 8x8 cell
+_glyphs = None  # ASCII 32-126 -> 8 column bytes (bit 0 on top), built on first text()
 
 
 class FrameBuffer:
     """FrameBuffer(buffer, width, height, format, stride=width), drawing into `buffer` in place."""
 
     def __init__(self, buffer, width, height, format, stride=None):
-        stride = width if stride is None else stride
-        if width < 1 or height < 1 or width > 0xFFFF or height > 0xFFFF or stride > 0xFFFF or stride < width:
-            raise ValueError
-        if format not in _BITS:
+        if format not in _FORMATS:
             raise ValueError("invalid format")
-        bpp = _BITS[format]
-        height_required, width_required, strides_required = height, width, height - 1
-        if format == MONO_VLSB:
-            height_required = (height + 7) & ~7
-            strides_required = height_required - 8
-        elif format in (MONO_HLSB, MONO_HMSB):
-            stride = (stride + 7) & ~7
-            width_required = (width + 7) & ~7
-        elif format == GS2_HMSB:
-            stride = (stride + 3) & ~3
-            width_required = (width + 3) & ~3
-        elif format == GS4_HMSB:
-            stride = (stride + 1) & ~1
-            width_required = (width + 1) & ~1
+        stride = width if stride is None else stride
+        if not (0 < width <= 0xFFFF and 0 < height <= 0xFFFF and width <= stride <= 0xFFFF):
+            raise ValueError("width, height and stride must be 1-65535, with stride >= width")
+        if format in _PACKED:
+            per_byte = 8 // _PACKED[format][0]
+            stride = -(-stride // per_byte) * per_byte  # rows start on a byte boundary
         view = memoryview(buffer)
         if view.ndim != 1 or view.itemsize != 1:
             view = view.cast("B")
-        needed = (
-            (strides_required * stride + (height_required - strides_required) * width_required) * bpp // 8
-        )
-        if needed > len(view):
-            raise ValueError
+        if len(view) < _bytes_needed(format, width, height, stride):
+            raise ValueError("buffer too small")
         self._buf = view
         self._buffer = buffer
         self.width = width
@@ -76,256 +49,253 @@ class FrameBuffer:
         self.format = format
         self.stride = stride
 
-    # --- one pixel, per format (x, y already inside the frame) ---------------------------------
+    # --- single pixels (callers keep x, y inside the frame) -----------------------------------
 
     def _set(self, x, y, c):
-        buf, fmt = self._buf, self.format
-        if fmt == MONO_VLSB:
-            i, bit = (y >> 3) * self.stride + x, 1 << (y & 7)
-            buf[i] = (buf[i] | bit) if c else (buf[i] & ~bit & 0xFF)
-        elif fmt == MONO_HLSB or fmt == MONO_HMSB:
-            i = (x + y * self.stride) >> 3
-            bit = 1 << ((x & 7) if fmt == MONO_HMSB else 7 - (x & 7))
-            buf[i] = (buf[i] | bit) if c else (buf[i] & ~bit & 0xFF)
+        fmt, buf = self.format, self._buf
+        if fmt == GS8:
+            buf[y * self.stride + x] = c & 0xFF
         elif fmt == RGB565:
-            i = 2 * (x + y * self.stride)
-            buf[i], buf[i + 1] = c & 0xFF, (c >> 8) & 0xFF
-        elif fmt == GS2_HMSB:
-            i, shift = (x + y * self.stride) >> 2, (x & 3) << 1
-            buf[i] = ((c & 3) << shift) | (buf[i] & ~(3 << shift) & 0xFF)
-        elif fmt == GS4_HMSB:
-            i = (x + y * self.stride) >> 1
-            buf[i] = ((c & 0x0F) | (buf[i] & 0xF0)) if x % 2 else (((c << 4) & 0xF0) | (buf[i] & 0x0F))
+            at = 2 * (y * self.stride + x)
+            buf[at : at + 2] = (c & 0xFFFF).to_bytes(2, "little")
         else:
-            buf[x + y * self.stride] = c & 0xFF
+            at, shift, mask = self._locate(x, y)
+            buf[at] = (buf[at] & ~(mask << shift) & 0xFF) | ((c & mask) << shift)
 
     def _get(self, x, y):
-        buf, fmt = self._buf, self.format
-        if fmt == MONO_VLSB:
-            return (buf[(y >> 3) * self.stride + x] >> (y & 7)) & 1
-        if fmt == MONO_HLSB or fmt == MONO_HMSB:
-            offset = (x & 7) if fmt == MONO_HMSB else 7 - (x & 7)
-            return (buf[(x + y * self.stride) >> 3] >> offset) & 1
+        fmt, buf = self.format, self._buf
+        if fmt == GS8:
+            return buf[y * self.stride + x]
         if fmt == RGB565:
-            i = 2 * (x + y * self.stride)
-            return buf[i] | (buf[i + 1] << 8)
-        if fmt == GS2_HMSB:
-            return (buf[(x + y * self.stride) >> 2] >> ((x & 3) << 1)) & 3
-        if fmt == GS4_HMSB:
-            pair = buf[(x + y * self.stride) >> 1]
-            return pair & 0x0F if x % 2 else pair >> 4
-        return buf[x + y * self.stride]
+            at = 2 * (y * self.stride + x)
+            return int.from_bytes(buf[at : at + 2], "little")
+        at, shift, mask = self._locate(x, y)
+        return (buf[at] >> shift) & mask
 
-    def _set_checked(self, x, y, c, mask=1):
-        if mask and 0 <= x < self.width and 0 <= y < self.height:
+    def _locate(self, x, y):
+        """(byte index, bit shift, value mask) of a pixel in a format of under 8 bits."""
+        if self.format == MONO_VLSB:
+            return (y // 8) * self.stride + x, y % 8, 1
+        bits, leftmost_high = _PACKED[self.format]
+        per_byte = 8 // bits
+        slot = x % per_byte
+        if leftmost_high:
+            slot = per_byte - 1 - slot
+        return (y * self.stride + x) // per_byte, slot * bits, (1 << bits) - 1
+
+    def _plot(self, x, y, c):
+        if 0 <= x < self.width and 0 <= y < self.height:
             self._set(x, y, c)
 
-    def _fill_rect(self, x, y, w, h, c):
-        if h < 1 or w < 1 or x + w <= 0 or y + h <= 0 or y >= self.height or x >= self.width:
-            return
-        xend, yend = min(self.width, x + w), min(self.height, y + h)
-        x, y = max(x, 0), max(y, 0)
-        for yy in range(y, yend):
-            for xx in range(x, xend):
-                self._set(xx, yy, c)
+    def _span(self, x0, x1, y, c):
+        """The row y from x0 to x1 inclusive, clipped."""
+        if 0 <= y < self.height:
+            for x in range(max(min(x0, x1), 0), min(max(x0, x1), self.width - 1) + 1):
+                self._set(x, y, c)
 
     # --- drawing -----------------------------------------------------------------------------
 
     def fill(self, c):
-        self._fill_rect(0, 0, self.width, self.height, c)
+        self.fill_rect(0, 0, self.width, self.height, c)
 
     def fill_rect(self, x, y, w, h, c):
-        self._fill_rect(x, y, w, h, c)
+        if w > 0:
+            for row in range(max(y, 0), min(y + h, self.height)):
+                self._span(x, x + w - 1, row, c)
 
     def pixel(self, x, y, c=None):
-        if 0 <= x < self.width and 0 <= y < self.height:
-            if c is None:
-                return self._get(x, y)
-            self._set(x, y, c)
+        if not (0 <= x < self.width and 0 <= y < self.height):
+            return None
+        if c is None:
+            return self._get(x, y)
+        self._set(x, y, c)
         return None
 
     def hline(self, x, y, w, c):
-        self._fill_rect(x, y, w, 1, c)
+        self.fill_rect(x, y, w, 1, c)
 
     def vline(self, x, y, h, c):
-        self._fill_rect(x, y, 1, h, c)
+        self.fill_rect(x, y, 1, h, c)
 
     def rect(self, x, y, w, h, c, f=False):
         if f:
-            self._fill_rect(x, y, w, h, c)
-        else:
-            self._fill_rect(x, y, w, 1, c)
-            self._fill_rect(x, y + h - 1, w, 1, c)
-            self._fill_rect(x, y, 1, h, c)
-            self._fill_rect(x + w - 1, y, 1, h, c)
+            self.fill_rect(x, y, w, h, c)
+            return
+        self.fill_rect(x, y, w, 1, c)
+        self.fill_rect(x, y + h - 1, w, 1, c)
+        self.fill_rect(x, y, 1, h, c)
+        self.fill_rect(x + w - 1, y, 1, h, c)
 
     def line(self, x1, y1, x2, y2, c):
-        dx, sx = (x2 - x1, 1) if x2 - x1 > 0 else (x1 - x2, -1)
-        dy, sy = (y2 - y1, 1) if y2 - y1 > 0 else (y1 - y2, -1)
-        steep = dy > dx
-        if steep:
-            x1, y1, dx, dy, sx, sy = y1, x1, dy, dx, sy, sx
-        e = 2 * dy - dx
-        for _ in range(dx):
-            if steep:
-                self._set_checked(y1, x1, c)
-            else:
-                self._set_checked(x1, y1, c)
-            while e >= 0:
-                y1 += sy
-                e -= 2 * dx
-            x1 += sx
-            e += 2 * dy
-        self._set_checked(x2, y2, c)
+        """Bresenham's line, both ends included."""
+        dx, dy = abs(x2 - x1), -abs(y2 - y1)
+        step_x, step_y = (1 if x2 > x1 else -1), (1 if y2 > y1 else -1)
+        error = dx + dy
+        while True:
+            self._plot(x1, y1, c)
+            if x1 == x2 and y1 == y2:
+                return
+            twice = 2 * error
+            if twice >= dy:
+                error += dy
+                x1 += step_x
+            if twice <= dx:
+                error += dx
+                y1 += step_y
 
     def ellipse(self, cx, cy, xr, yr, c, f=False, m=0x0F):
-        mask = (0x10 if f else 0) | (m & 0x0F)
-        if xr == 0 and yr == 0:
-            self._set_checked(cx, cy, c, mask & 0x0F)
-            return
-        two_a, two_b = 2 * xr * xr, 2 * yr * yr
-        x, y = xr, 0
-        xchange, ychange = yr * yr * (1 - 2 * xr), xr * xr
-        error, stop_x, stop_y = 0, two_b * xr, 0
-        while stop_x >= stop_y:
-            self._ellipse_points(cx, cy, x, y, c, mask)
-            y += 1
-            stop_y += two_a
-            error += ychange
-            ychange += two_a
-            if 2 * error + xchange > 0:
-                x -= 1
-                stop_x -= two_b
-                error += xchange
-                xchange += two_b
-        x, y = 0, yr
-        xchange, ychange = yr * yr, xr * xr * (1 - 2 * yr)
-        error, stop_x, stop_y = 0, 0, two_a * yr
-        while stop_x <= stop_y:
-            self._ellipse_points(cx, cy, x, y, c, mask)
-            x += 1
-            stop_x += two_b
-            error += xchange
-            xchange += two_b
-            if 2 * error + ychange > 0:
-                y -= 1
-                stop_y -= two_a
-                error += ychange
-                ychange += two_a
-
-    def _ellipse_points(self, cx, cy, x, y, c, mask):
-        if mask & 0x10:
-            if mask & 1:
-                self._fill_rect(cx, cy - y, x + 1, 1, c)
-            if mask & 2:
-                self._fill_rect(cx - x, cy - y, x + 1, 1, c)
-            if mask & 4:
-                self._fill_rect(cx - x, cy + y, x + 1, 1, c)
-            if mask & 8:
-                self._fill_rect(cx, cy + y, x + 1, 1, c)
-        else:
-            self._set_checked(cx + x, cy - y, c, mask & 1)
-            self._set_checked(cx - x, cy - y, c, mask & 2)
-            self._set_checked(cx - x, cy + y, c, mask & 4)
-            self._set_checked(cx + x, cy + y, c, mask & 8)
+        """Midpoint ellipse; bit n of `m` enables quadrant n+1 (counter-clockwise from top right)."""
+        for x, y in _quarter_ellipse(abs(xr), abs(yr)):
+            for bit, sx, sy in ((1, 1, -1), (2, -1, -1), (4, -1, 1), (8, 1, 1)):
+                if m & bit:
+                    if f:
+                        self._span(cx, cx + sx * x, cy + sy * y, c)
+                    else:
+                        self._plot(cx + sx * x, cy + sy * y, c)
 
     def poly(self, x, y, coords, c, f=False):
         """The closed polygon through `coords` (an array of x0, y0, x1, y1, ...), offset by (x, y)."""
-        points = list(coords)
-        n = len(points) // 2
-        if n == 0:
+        values = list(coords)
+        corners = [(x + values[i], y + values[i + 1]) for i in range(0, len(values) - 1, 2)]
+        if not corners:
             return
-        if not f:
-            px1, py1 = points[0], points[1]
-            for i in range(n - 1, -1, -1):
-                px2, py2 = points[2 * i], points[2 * i + 1]
-                self.line(x + px1, y + py1, x + px2, y + py2, c)
-                px1, py1 = px2, py2
-            return
-        ys = [points[2 * i + 1] for i in range(n)]
-        for row in range(min(ys), max(ys) + 1):
-            # The scan line's crossings with the edges (the bottom pixel of each edge left out, so a
-            # vertex shared by two edges counts once), filled pairwise; local minima by hand.
-            nodes = []
-            px1, py1 = points[0], points[1]
-            for i in range(n - 1, -1, -1):
-                px2, py2 = points[2 * i], points[2 * i + 1]
-                if py1 != py2 and ((py1 > row >= py2) or (py1 <= row < py2)):
-                    nodes.append(_cdiv(32 * px1 + _cdiv(32 * (px2 - px1) * (row - py1), py2 - py1) + 16, 32))
-                elif row == max(py1, py2):
-                    if py1 < py2:
-                        self._set_checked(x + px2, y + py2, c)
-                    elif py2 < py1:
-                        self._set_checked(x + px1, y + py1, c)
-                    else:
-                        self.line(x + px1, y + py1, x + px2, y + py2, c)
-                px1, py1 = px2, py2
-            nodes.sort()
-            for i in range(0, len(nodes) - 1, 2):
-                self._fill_rect(x + nodes[i], y + row, nodes[i + 1] - nodes[i] + 1, 1, c)
+        edges = list(zip(corners, corners[1:] + corners[:1], strict=True))
+        if f:
+            rows = [cy for _, cy in corners]
+            for row in range(max(min(rows), 0), min(max(rows), self.height - 1) + 1):
+                crossings = sorted(_crossing(a, b, row) for a, b in edges if _crosses(a, b, row))
+                for left, right in zip(crossings[::2], crossings[1::2], strict=False):
+                    self._span(left, right, row, c)
+        for (ax, ay), (bx, by) in edges:  # the outline, so edges and corners are always drawn
+            self.line(ax, ay, bx, by, c)
 
-    def text(self, s, x0, y0, c=1):
-        for ch in s:
-            code = ord(ch)
-            if code < 32 or code > 127:
-                code = 127
-            glyph = _FONT_8X8[(code - 32) * 8 : (code - 31) * 8]
-            for column in glyph:
-                if 0 <= x0 < self.width:
-                    y = y0
-                    while column:
-                        if column & 1 and 0 <= y < self.height:
-                            self._set(x0, y, c)
-                        column >>= 1
-                        y += 1
-                x0 += 1
+    def text(self, s, x, y, c=1):
+        glyphs = _glyph_table()
+        for ch in str(s):
+            for column in glyphs.get(ch, glyphs[None]):
+                if 0 <= x < self.width:
+                    for row in range(CELL):
+                        if column >> row & 1:
+                            self._plot(x, y + row, c)
+                x += 1
 
     def scroll(self, xstep, ystep):
-        if xstep < 0:
-            if -xstep >= self.width:
-                return
-            xs = range(0, self.width + xstep)
-        else:
-            if xstep >= self.width:
-                return
-            xs = range(self.width - 1, xstep - 1, -1)
-        if ystep < 0:
-            if -ystep >= self.height:
-                return
-            ys = range(0, self.height + ystep)
-        else:
-            if ystep >= self.height:
-                return
-            ys = range(self.height - 1, ystep - 1, -1)
-        for y in ys:
-            for x in xs:
-                self._set(x, y, self._get(x - xstep, y - ystep))
+        """Shift the contents; the uncovered strip keeps its old pixels, as on a real hub."""
+        w, h = self.width, self.height
+        if abs(xstep) >= w or abs(ystep) >= h:
+            return
+        before = [[self._get(px, py) for px in range(w)] for py in range(h)]
+        for py in range(max(ystep, 0), min(h + ystep, h)):
+            for px in range(max(xstep, 0), min(w + xstep, w)):
+                self._set(px, py, before[py - ystep][px - xstep])
 
     def blit(self, fbuf, x, y, key=-1, palette=None):
+        """Copy `fbuf` (a FrameBuffer or (buffer, width, height, format[, stride])) to (x, y).
+
+        With a palette, source values index its first row; `key` (after the palette) is transparent.
+        """
         source = fbuf if isinstance(fbuf, FrameBuffer) else FrameBuffer(*fbuf)
         if palette is not None and not isinstance(palette, FrameBuffer):
             palette = FrameBuffer(*palette)
-        if x >= self.width or y >= self.height or -x >= source.width or -y >= source.height:
-            return
-        x1, y1 = max(0, -x), max(0, -y)
-        for y0 in range(max(0, y), min(self.height, y + source.height)):
-            cx1 = x1
-            for x0 in range(max(0, x), min(self.width, x + source.width)):
-                c = source._get(cx1, y1)
+        for sy in range(max(0, -y), min(source.height, self.height - y)):
+            for sx in range(max(0, -x), min(source.width, self.width - x)):
+                value = source._get(sx, sy)
                 if palette is not None:
-                    c = palette._get(c, 0)
-                if c != key:
-                    self._set(x0, y0, c)
-                cx1 += 1
-            y1 += 1
-
-
-def _cdiv(a, b):
-    """C's integer division (truncating towards zero), as the built-in module computes."""
-    q = abs(a) // abs(b)
-    return -q if (a < 0) != (b < 0) else q
+                    value = palette._get(value, 0) if value < palette.width else 0
+                if value != key:
+                    self._set(x + sx, y + sy, value)
 
 
 def FrameBuffer1(buffer, width, height, stride=None):
-    """The old MONO_VLSB-only constructor, kept by MicroPython."""
+    """The old MONO_VLSB-only constructor, which MicroPython still accepts."""
     return FrameBuffer(buffer, width, height, MONO_VLSB, stride)
+
+
+def _bytes_needed(format, width, height, stride):
+    if format == MONO_VLSB:
+        return ((height + 7) // 8 - 1) * stride + width
+    if format in _PACKED:
+        per_byte = 8 // _PACKED[format][0]
+        return ((height - 1) * stride + width + per_byte - 1) // per_byte
+    pixels = (height - 1) * stride + width
+    return 2 * pixels if format == RGB565 else pixels
+
+
+def _quarter_ellipse(a, b):
+    """The points (x, y >= 0) of the midpoint ellipse with radii a, b, in the first quadrant."""
+    if a == 0 or b == 0:
+        return [(x, 0) for x in range(a + 1)] + [(0, y) for y in range(b + 1)]
+    points, a2, b2 = [], a * a, b * b
+    x, y = 0, b
+    # Region 1, where the slope is shallower than -1: step x, sometimes y. Decisions are scaled by 4.
+    decision = 4 * b2 - 4 * a2 * b + a2
+    while b2 * x < a2 * y:
+        points.append((x, y))
+        x += 1
+        if decision < 0:
+            decision += 4 * b2 * (2 * x + 1)
+        else:
+            y -= 1
+            decision += 4 * b2 * (2 * x + 1) - 8 * a2 * y
+    # Region 2: step y, sometimes x.
+    decision = b2 * (2 * x + 1) ** 2 + 4 * a2 * (y - 1) ** 2 - 4 * a2 * b2
+    while y >= 0:
+        points.append((x, y))
+        y -= 1
+        if decision > 0:
+            decision += 4 * a2 - 8 * a2 * y
+        else:
+            x += 1
+            decision += 8 * b2 * x - 8 * a2 * y + 4 * a2
+    return points
+
+
+def _crosses(a, b, row):
+    """Whether the edge a-b spans scan row `row` (lower end excluded, so a shared corner counts once)."""
+    return min(a[1], b[1]) <= row < max(a[1], b[1])
+
+
+def _crossing(a, b, row):
+    """The x, to the nearest pixel, where edge a-b meets scan row `row`."""
+    (ax, ay), (bx, by) = (a, b) if a[1] < b[1] else (b, a)
+    numerator, denominator = 2 * (ax * (by - ay) + (bx - ax) * (row - ay)) + (by - ay), 2 * (by - ay)
+    return numerator // denominator
+
+
+def _glyph_table():
+    global _glyphs
+    if _glyphs is None:
+        _glyphs = _draw_glyphs()
+    return _glyphs
+
+
+def _draw_glyphs():
+    """ASCII 32-126 from Pillow's default font at 8 px, thresholded into 8x8 cells.
+
+    At this size a few shapes (braces, say) threshold to the same pixels; such a glyph takes the
+    nearest other threshold that keeps it apart, so every character reads as itself. Characters
+    outside that range get an open box.
+    """
+    from PIL import Image, ImageDraw, ImageFont
+
+    font = ImageFont.load_default(size=CELL)
+    printable = "".join(chr(code) for code in range(32, 127))
+    top = font.getbbox(printable)[1]
+    glyphs, taken = {}, set()
+    for ch in printable:
+        cell = Image.new("L", (CELL, CELL), 0)
+        ImageDraw.Draw(cell).text((0, -top), ch, fill=255, font=font)
+        ink = cell.load()
+        for threshold in _THRESHOLDS:
+            columns = bytes(
+                sum(1 << row for row in range(CELL) if ink[col, row] >= threshold) for col in range(CELL)
+            )
+            if ch == " " or (any(columns) and columns not in taken):
+                break
+        glyphs[ch] = columns
+        taken.add(columns)
+    glyphs[None] = bytes((0x00, 0x7E, 0x42, 0x42, 0x42, 0x42, 0x7E, 0x00))
+    return glyphs
+
+
+_THRESHOLDS = (64, 56, 72, 48, 80, 40, 96, 128)  # ink levels (of 255) counted as a lit pixel, best first
