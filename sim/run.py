@@ -20,6 +20,7 @@ prints the result as JSON; `openbricks sim run` starts it (run_process.py).
 
 import _thread
 import argparse
+import contextlib
 import io
 import json
 import os
@@ -130,7 +131,13 @@ class ProgramRun:
         saved_streams = sys.stdout, sys.stderr
         started = time.perf_counter()
         try:
-            with Shim(sim), RunFlash(self.hub_dir) as flash, ProgramRobot(sim), PythonCost(sim.clock):
+            with (
+                _interruptible(),
+                Shim(sim),
+                RunFlash(self.hub_dir) as flash,
+                ProgramRobot(sim),
+                PythonCost(sim.clock),
+            ):
                 sys.stdout = sys.stderr = output
                 if watchdog is not None:
                     watchdog.start()
@@ -181,6 +188,25 @@ class ProgramRun:
     def _wall_limit_reached(self):
         self._wall_expired = True
         _thread.interrupt_main()
+
+
+@contextlib.contextmanager
+def _interruptible():
+    """Let a stop reach the program as KeyboardInterrupt while it runs.
+
+    The wall-clock watchdog and the viewer's stop interrupt the main thread with
+    `_thread.interrupt_main()`, which does nothing while SIGINT is ignored, and a process
+    started in the background of a script inherits it ignored: a program that never lets time
+    pass would then outlive every limit.
+    """
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
 
 
 def _wall_limit_message(wall_limit_s, sim_ms):

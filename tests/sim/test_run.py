@@ -2,6 +2,7 @@
 
 import json
 import os
+import signal
 import subprocess
 import sys
 
@@ -78,6 +79,17 @@ def test_a_loop_that_never_lets_time_pass_hits_the_wall_limit_with_an_explanatio
     result = run("x = 0\nwhile True:\n    x += 1\n", wall_limit_s=0.3)
     assert result.exit == WALL_LIMIT
     assert "time.sleep_ms" in result.error
+
+
+def test_the_wall_limit_holds_in_a_process_started_with_sigint_ignored():
+    """A background job of a script inherits SIGINT ignored; the watchdog must still end the loop."""
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        result = run("x = 0\nwhile True:\n    x += 1\n", wall_limit_s=0.3)
+        assert signal.getsignal(signal.SIGINT) is signal.SIG_IGN  # the run leaves it as it found it
+    finally:
+        signal.signal(signal.SIGINT, previous)
+    assert result.exit == WALL_LIMIT
 
 
 def test_sys_exit_is_a_normal_end_and_machine_reset_is_reported():
