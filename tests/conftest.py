@@ -1,7 +1,13 @@
 """Suite-wide pytest configuration."""
 
 import os
+import signal
 import tempfile
+
+# A suite started in the background of a script inherits SIGINT ignored, and so would every command it
+# starts: the tests that press Ctrl-C on a command would then wait for nothing. Give Ctrl-C back.
+if signal.getsignal(signal.SIGINT) is signal.SIG_IGN:
+    signal.signal(signal.SIGINT, signal.default_int_handler)
 
 # A console running on this computer publishes itself in the runtime dir, and `openbricks` commands go
 # through it when they find it: the suite gets a runtime dir of its own, so its commands never do.
