@@ -9,34 +9,15 @@ hub's bus, shown as a share of the 1 ms tick.
 
 from __future__ import annotations
 
-import shutil
-import subprocess
-import tempfile
-from pathlib import Path
-
 from benchmarks import Row
+from benchmarks._native_bench import run_c_benchmark
 
-REPO = Path(__file__).resolve().parent.parent
-NATIVE = REPO / "firmware" / "native"
-BENCH_SOURCE = Path(__file__).resolve().parent / "native" / "bench_bus_engine.c"
 CORES = ("serial_bus", "scs")
 TICK_US = 1000
 
 
 def run() -> list[Row]:
-    compiler = shutil.which("gcc") or shutil.which("cc")
-    if compiler is None:
-        raise RuntimeError("no C compiler on PATH (gcc or cc): needed for the bus engine benchmark")
-    with tempfile.TemporaryDirectory(prefix="ob-bench-") as tmp:
-        exe = Path(tmp) / "bench_bus_engine"
-        sources = [str(BENCH_SOURCE)] + [str(NATIVE / f"{core}.c") for core in CORES]
-        subprocess.run(
-            [compiler, "-std=c99", "-O2", f"-I{NATIVE}", *sources, "-lm", "-o", str(exe)],
-            check=True,
-            capture_output=True,
-            text=True,
-        )
-        out = subprocess.run([str(exe)], check=True, capture_output=True, text=True).stdout
+    out = run_c_benchmark("bench_bus_engine.c", CORES)
     figures = {line.split()[0]: [float(v) for v in line.split()[1:]] for line in out.splitlines()}
     best_ns, median_ns = figures["engine_tick"]
     last_us, mean_us = figures["bus_us"]

@@ -8,18 +8,12 @@ drives them; the full control period is one drivebase tick plus both wheels' ser
 
 from __future__ import annotations
 
-import shutil
 import statistics
-import subprocess
-import tempfile
 import time
-from pathlib import Path
 
 from benchmarks import Row
+from benchmarks._native_bench import run_c_benchmark
 
-REPO = Path(__file__).resolve().parent.parent
-NATIVE = REPO / "firmware" / "native"
-BENCH_SOURCE = Path(__file__).resolve().parent / "native" / "bench_ticks.c"
 CORES = ("drivebase", "trajectory", "observer", "servo")
 
 BINDING_TICKS = 200_000
@@ -27,19 +21,7 @@ BINDING_ROUNDS = 5
 
 
 def c_ticks() -> list[Row]:
-    compiler = shutil.which("gcc") or shutil.which("cc")
-    if compiler is None:
-        raise RuntimeError("no C compiler on PATH (gcc or cc): needed for the pure-C tick benchmark")
-    with tempfile.TemporaryDirectory(prefix="ob-bench-") as tmp:
-        exe = Path(tmp) / "bench_ticks"
-        sources = [str(BENCH_SOURCE)] + [str(NATIVE / f"{core}.c") for core in CORES]
-        subprocess.run(
-            [compiler, "-std=c99", "-O2", f"-I{NATIVE}", *sources, "-lm", "-o", str(exe)],
-            check=True,
-            capture_output=True,
-            text=True,
-        )
-        out = subprocess.run([str(exe)], check=True, capture_output=True, text=True).stdout
+    out = run_c_benchmark("bench_ticks.c", CORES)
     rows = []
     labels = {
         "drivebase_tick": "C: drivebase tick",
