@@ -7,9 +7,13 @@
     viewer.close()
 
 Three threads meet here. The simulation's thread (the one running the program) captures a Frame
-each time the Pacer fires and is held back by it; viser's threads deliver button presses; the
-viewer's own publishing thread draws the newest Frame at up to `frame_hz` and redraws the status
-and output panels a few times a second. Only the simulation's thread touches the live MuJoCo data.
+each time the Pacer fires and is held back by it; viser's threads deliver button presses; a task on
+viser's own event loop draws the newest Frame at up to `frame_hz` and redraws the status and output
+panels a few times a second. Only the simulation's thread touches the live MuJoCo data. Drawing
+happens on viser's loop, not on a thread of ours, because viser's outgoing buffer wakes its sender
+through an asyncio.Event that is only safe to set from that loop: pushed from another thread, pose
+updates sat unsent until something else woke the sender, and the page saw 15 poses a second
+instead of 60.
 
 The CLI uses it through serve_run(); the console's daemon can hold one per sim job and hand its
 URL to the browsers that watch that job.
@@ -18,6 +22,8 @@ URL to the browsers that watch that job.
 from __future__ import annotations
 
 import _thread
+import asyncio
+import concurrent.futures
 import contextlib
 import io
 import ipaddress
@@ -95,7 +101,7 @@ class SimViewer:
         self._mirror = None
         self._fingerprint = None
         self._scene_lock = threading.Lock()  # the scene is rebuilt on one thread and drawn on another
-        self._rates = deque()  # (wall_s, sim_ms) of recent frames; the publishing thread's alone
+        self._rates = deque()  # (wall_s, sim_ms) of recent frames; the publishing task's alone
         self._rate_epoch = 0  # bumped when the measured rate must start over (new run, new speed)
         self.output = OutputTail()
         self.restart_requested = threading.Event()
@@ -117,8 +123,9 @@ class SimViewer:
             )
             self._visualization = self.server.gui.add_folder("Visualization", expand_by_default=False)
             self._closing = threading.Event()
-            self._publisher = threading.Thread(target=self._publish_loop, name="sim-viewer", daemon=True)
-            self._publisher.start()
+            self._publisher = asyncio.run_coroutine_threadsafe(
+                self._publish_loop(), self.server.get_event_loop()
+            )
         except BaseException:
             self._stop_server()
             raise
@@ -257,8 +264,7 @@ class SimViewer:
             if self._pacer is not None:
                 self._pacer.stop()
         self._closing.set()
-        if self._publisher.is_alive() and self._publisher is not threading.current_thread():
-            self._publisher.join(timeout=2.0)
+        concurrent.futures.wait([self._publisher], timeout=2.0)
         self._stop_server()
 
     def __enter__(self):
@@ -324,7 +330,7 @@ class SimViewer:
             if self._simulation is simulation:
                 _thread.interrupt_main()
 
-    def _publish_loop(self) -> None:
+    async def _publish_loop(self) -> None:
         period = 1.0 / self._frame_hz
         drawn = {"frame": None, "output": -1, "text_due": 0.0, "rate_epoch": -1}
         next_frame = time.perf_counter()
@@ -338,7 +344,7 @@ class SimViewer:
                 if failures == 1:
                     _log.exception("the 3D viewer could not draw a frame")
             next_frame = max(next_frame + period, time.perf_counter())
-            self._closing.wait(max(0.0, next_frame - time.perf_counter()))
+            await asyncio.sleep(max(0.0, next_frame - time.perf_counter()))
 
     def _publish(self, drawn: dict) -> None:
         """Draw what changed since the last call: the newest frame, then (a few times a second) text."""
@@ -346,10 +352,14 @@ class SimViewer:
         if drawn["rate_epoch"] != self._rate_epoch:
             drawn["rate_epoch"] = self._rate_epoch
             self._rates.clear()
-        if frame is not None and frame is not drawn["frame"]:
-            with self._scene_lock:
+        # A scene being rebuilt on the simulation's thread is skipped, not waited for: this runs on
+        # viser's loop, which must keep serving meanwhile.
+        if frame is not None and frame is not drawn["frame"] and self._scene_lock.acquire(blocking=False):
+            try:
                 if self._mirror is not None:
                     self._mirror.show(frame)
+            finally:
+                self._scene_lock.release()
             drawn["frame"] = frame
             self._rates.append((frame.wall_s, frame.sim_ms))
         now = time.perf_counter()
