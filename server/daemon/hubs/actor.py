@@ -47,7 +47,14 @@ from openbricks_server.daemon.hubs.errors import (
 )
 from openbricks_server.daemon.hubs.output import LineCounter, OutputParser, RunLog, now_ms, parse_run_log
 from openbricks_server.errors import CliError, UsageError
-from openbricks_server.link import HubCallError, HubException, LinkDropped, LinkError, LinkTimeout
+from openbricks_server.link import (
+    HubCallError,
+    HubException,
+    LinkDropped,
+    LinkError,
+    LinkTimeout,
+    ProtocolError,
+)
 from openbricks_server.link.base import Link
 from openbricks_server.link.host_call import HubInfo, call_source
 from openbricks_server.link.raw_repl import RawRepl
@@ -310,9 +317,12 @@ class HubActor:
         if self._holder is not None:
             raise self._busy_error()
         if not self.connected or self.state.status != "idle":
+            status = self.state.status
+            if not self.connected and status not in ("offline", "connecting"):
+                status = "reconnecting"  # the link just went; the status catches up in a moment
             raise HubOfflineError(
-                f"{self.name} is {self.state.status}"
-                + (f" ({self.last_error})" if self.last_error and self.state.status == "offline" else ""),
+                f"{self.name} is {status}"
+                + (f" ({self.last_error})" if self.last_error and status == "offline" else ""),
                 "connect it first (POST /api/hubs/{hub}/connect) and wait until it is idle",
             )
         self._set_holder(Holder(operation, who, now_ms()))
@@ -684,13 +694,12 @@ class HubActor:
         offset = 0
         while offset is not None:
             try:
-                page = await self._repl.call("read_run", index=index, offset=offset)
+                page, offset = await self._repl.read_run_page(index, offset)
             except HubCallError:
                 if offset == 0:
                     await self._refuse_missing_log(index)
                 raise
-            parts.append(page["text"])
-            offset = page["next_offset"]
+            parts.append(page)
         parsed = parse_run_log("".join(parts))
         if parsed is None:
             raise HubRefusedError(f"run log {index} on {self.name} is not a run log", "")
@@ -717,8 +726,8 @@ class HubActor:
                 continue
             try:
                 parsed = await self._read_run(index)
-            except (HubCallError, HubRefusedError):
-                continue  # overwritten meanwhile
+            except (HubCallError, HubRefusedError, ProtocolError):
+                continue  # overwritten meanwhile, or damaged on the way: read again next time
             self.events.run_log_read(
                 self.hub_id,
                 index % slots,

@@ -6,13 +6,14 @@ from __future__ import annotations
 
 import asyncio
 import json
+import re
 import types
 from pathlib import Path
 
 import pytest
 
 from openbricks_server.compile import Program, compile_program
-from openbricks_server.daemon.hubs.errors import HubBusyError
+from openbricks_server.daemon.hubs.errors import HubBusyError, HubLinkError, HubOfflineError
 from openbricks_server.daemon.hubs.manager import HubManager
 from openbricks_server.link.discovery import control
 from tests.server.daemon.hubs.recording_events import RecordingEvents
@@ -191,3 +192,42 @@ def test_an_untethered_button_run_is_read_back_on_connect_with_its_outcome(data_
     hub_id, _slot, _started, lines, outcome, detail = log
     assert hub_id == "virtual:SimHub-1" and outcome == "error" and "ZeroDivisionError" in detail
     assert lines[0].text == "alone" and any("ZeroDivisionError" in line.text for line in lines)
+
+
+def test_a_run_log_slice_damaged_on_the_way_is_refused_with_a_reason_and_read_again_later(data_dir):
+    """The daemon reads run logs through the same checked page reader as `openbricks log`: a slice
+    whose checksum does not match is a link error saying so, never a half-parsed log."""
+
+    async def scenario():
+        manager, events = await started_hubs(data_dir, 1)
+        try:
+            (hub,) = manager.list()
+            run_id = await hub.run(program("print('kept')\n"), who="a")
+            await events.until(lambda: events.runs[run_id].ended and hub.state.status == "idle")
+            (entry,) = await hub.list_logs(who="a")
+            repl = hub._repl
+            honest = repl.call
+
+            async def damaging(name, **kwargs):
+                reply = await honest(name, **kwargs)
+                return dict(reply, text=reply["text"][::-1] + "!") if name == "read_run" else reply
+
+            repl.call = damaging
+            try:
+                with pytest.raises(HubLinkError) as refused:
+                    await hub.read_log(int(entry["index"]), who="a")
+            finally:
+                repl.call = honest
+            try:  # the link is resynced first; meanwhile the hub is refused with its real state
+                again = await hub.read_log(int(entry["index"]), who="a")
+            except HubOfflineError as exc:
+                assert re.fullmatch(r"SimHub-1 is (reconnecting|connecting|offline)", exc.message)
+                await hub.connect(60)
+                again = await hub.read_log(int(entry["index"]), who="a")
+            return refused.value, again
+        finally:
+            await manager.close()
+
+    refused, again = asyncio.run(scenario())
+    assert "damaged on the way" in refused.message and "read the log again" in refused.message
+    assert [line.text for line in again.lines] == ["kept"]
