@@ -1,9 +1,10 @@
 """python -m openbricks_sim.virtual_hub --name RobotA [--pty] [--dir DIR] [--world W] ...
 
 Runs one virtual hub in this process until it is stopped (SIGTERM, SIGINT, or the end of stdin in
-stdio mode). With --pty the first line on stdout is the path of the pseudo-terminal to connect to
-(`mpremote connect <path>`), the second `control <path>` names the control socket; without it the
-hub talks over stdin/stdout. Once up, the hub also records both in `endpoint.json` in its directory,
+stdio mode; SIGHUP switches it off once the program running has ended). With --pty the first line
+on stdout is the path of the pseudo-terminal to connect to (`mpremote connect <path>`), the second
+`control <path>` names the control socket; without it the hub talks over stdin/stdout. Once up, the
+hub also records both in `endpoint.json` in its directory,
 which is how `openbricks` finds it (endpoint.py).
 
 The process is the hub's sandbox: user code runs here, under an address-space limit (--memory-mb)
@@ -143,6 +144,8 @@ def main(argv=None):
     faulthandler.register(signal.SIGUSR1)  # `kill -USR1 <pid>`: every thread's stack to stderr
     signal.signal(signal.SIGTERM, stop)
     signal.signal(signal.SIGINT, stop)
+    # SIGHUP: the host hung up (the console that started this hub died, or its terminal closed).
+    signal.signal(signal.SIGHUP, lambda _signum, _frame: hub.power_off_when_idle())
     try:
         hub.serve(on_ready=ready)
     finally:

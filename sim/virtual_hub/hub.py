@@ -19,6 +19,7 @@ import os
 import queue
 import sys
 import threading
+import time
 from dataclasses import dataclass
 
 from ..program_robot import ProgramRobot
@@ -43,6 +44,9 @@ LOCK_FILE = "hub.lock"
 
 
 _END_OF_LINK = object()  # queued by the reader when the link ends
+# After its host goes away, a hub switches off once no program has run for this long (the run log's
+# closing lines are written just after a run ends).
+_IDLE_BEFORE_POWER_OFF_S = 1.0
 
 
 class HubShutdown(BaseException):
@@ -194,6 +198,25 @@ class VirtualHub:
             return
         self._closing.set()
         self.gate.interrupt(HubShutdown)
+
+    def power_off_when_idle(self):
+        """The host that started this hub is gone (any thread): let the program that is running
+        finish and log its end, as a hub left on the table would, then switch off, so no orphaned
+        process stays behind."""
+
+        def wait_then_shut_down():
+            quiet_since = None
+            while not self._closing.is_set():
+                if self.run_active:
+                    quiet_since = None
+                elif quiet_since is None:
+                    quiet_since = time.monotonic()
+                elif time.monotonic() - quiet_since >= _IDLE_BEFORE_POWER_OFF_S:
+                    break
+                time.sleep(0.05)
+            self.shutdown()
+
+        threading.Thread(target=wait_then_shut_down, name="power-off", daemon=True).start()
 
     def close(self):
         self._closing.set()

@@ -9,7 +9,10 @@ address, serial port, virtual hub name), so a hub renamed over BLE keeps its id 
 from __future__ import annotations
 
 import asyncio
+import ctypes
 import os
+import signal
+import sys
 from abc import ABC, abstractmethod
 from typing import Any
 
@@ -20,6 +23,8 @@ from openbricks_server.link.errors import LinkError, LinkTimeout
 CONNECT_TIMEOUT_S = 20.0
 VIRTUAL_START_TIMEOUT_S = 30.0
 VIRTUAL_STOP_GRACE_S = 5.0
+_PR_SET_PDEATHSIG = 1  # <linux/prctl.h>
+_prctl = ctypes.CDLL(None, use_errno=True).prctl if sys.platform.startswith("linux") else None
 
 
 def hub_id(kind: HubKind, address: str) -> str:
@@ -137,6 +142,7 @@ async def start_virtual_hub(
         stderr=asyncio.subprocess.PIPE,
         env=env,
         start_new_session=True,  # a Ctrl-C at the daemon's terminal is the daemon's to handle
+        preexec_fn=_hang_up_with(os.getpid()) if _prctl is not None else None,
     )
     try:
         async with asyncio.timeout(VIRTUAL_START_TIMEOUT_S):
@@ -155,3 +161,17 @@ async def start_virtual_hub(
         await process.wait()
         raise LinkError(f"virtual hub {name} did not start: {err[-300:] or path!r}")
     return VirtualBackend(name, path, process)
+
+
+def _hang_up_with(daemon_pid: int):
+    """What the hub's process does before it starts (Linux): ask for SIGHUP when the daemon dies,
+    even by `kill -9`, so a virtual hub never outlives its console; it finishes its program first,
+    as a hub left on the table would (`openbricks_sim.virtual_hub`). Runs between fork and exec:
+    nothing here may take a lock."""
+
+    def ask():
+        _prctl(_PR_SET_PDEATHSIG, signal.SIGHUP)
+        if os.getppid() != daemon_pid:  # the daemon died before the request was in place
+            os.kill(os.getpid(), signal.SIGHUP)
+
+    return ask
