@@ -11,7 +11,7 @@ A direct motor command (run_speed, run_angle, hold, dc, ...) takes its wheel bac
 the drive base's move ends, its other wheel is released, and a native servo controller on the
 slot's motor IO runs the command; the next drive base move takes both wheels again.
 
-The engine contract (shared with the simulator and the firmware; see sim_arch.md):
+The engine contract (shared with the simulator and the firmware; docs/architecture.md, "The bus engine"):
 `adopt(servo_id, invert=False) -> slot`, `motor_io(slot)` (a native MotorIO, or an object with
 `read_angle() -> deg | None`, `write_duty(pct)`, `coast()`), `angle_deg(slot)`, `speed_dps(slot)`,
 `load_pct(slot)`, `stats(slot) -> (replies, failed_reads, failed_in_a_row)`, `release(slot)`.
