@@ -150,8 +150,8 @@ def run_ours(program: Path, world: str) -> Measured:
         str(program),
         "--world",
         world,
-        "--limit-ms",
-        str(SIM_LIMIT_S * 1000),
+        "--duration",
+        str(SIM_LIMIT_S),
         "--json",
     ]
     done, wall_s, cpu_s, peak_mb = _measure(command, program.parent, env)

@@ -16,19 +16,26 @@ from __future__ import annotations
 import argparse
 import importlib.util
 import json
-import math
 import sys
 import time
 
-from openbricks_sim.limits import DEFAULT_MEMORY_MB
+from openbricks_sim.job import (
+    BARE_0X29_PARTS,  # noqa: F401 - kept in step with sensors.rig by a test
+    CHASSIS_NAMES,  # noqa: F401
+    RANGE_FINDERS,  # noqa: F401 - kept in step with sensors.rig by a test
+    WORLD_NAMES,  # noqa: F401 - kept in step with worlds.WORLDS by a test
+    JobError,
+    add_place_arguments,
+    add_run_arguments,
+    add_seed_argument,
+    job_from_args,
+    positive_argument,
+    start_pose,
+)
 from openbricks_sim.program_robot import DEFAULT_CHASSIS
 
 EXIT_OK = 0
 EXIT_FAILED = 1
-WORLD_NAMES = "empty, line_track, zones, arena, wro"  # kept in step with worlds.WORLDS by a test
-CHASSIS_NAMES = ("st3032", "jgb37")
-RANGE_FINDERS = ("vl53l0x", "vl53l1x")  # kept in step with sensors.rig by a test, as WORLD_NAMES
-BARE_0X29_PARTS = ("tcs34725", "vl53l0x", "vl53l1x")
 INSTALL_HINT = (
     "the simulator needs MuJoCo, which comes with the [sim] extra: pipx install 'openbricks[sim]' "
     "(or pip install 'openbricks[sim]')"
@@ -39,76 +46,8 @@ VIEWER_UNAVAILABLE = (
 )
 
 
-def seed_argument(text):
-    """--seed: a whole number from 0 up (what the worlds' random generators accept)."""
-    try:
-        seed = int(text)
-    except ValueError:
-        seed = -1
-    if seed < 0:
-        raise argparse.ArgumentTypeError(f"{text!r}: give a whole number from 0 up")
-    return seed
-
-
-def limit_argument(text):
-    """A limit in seconds or MB: a number from 0 up, 0 meaning no limit."""
-    try:
-        value = float(text)
-    except ValueError:
-        value = -1.0
-    if not value >= 0:
-        raise argparse.ArgumentTypeError(f"{text!r}: give a number from 0 up (0: no limit)")
-    return value
-
-
 class SimCliError(Exception):
     """A user error: printed as one line, exit status 1."""
-
-
-def _positive(text: str) -> float:
-    """Seconds or a speed factor: positive and finite (0, negatives, nan and inf are mistakes)."""
-    value = _finite(text)
-    if value <= 0:
-        raise argparse.ArgumentTypeError(f"{text!r}: give a positive number, e.g. 2 or 0.5")
-    return value
-
-
-def _finite(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
-    if not math.isfinite(value):
-        raise argparse.ArgumentTypeError(f"{text!r}: give a finite number")
-    return value
-
-
-def _start_options(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument(
-        "--world", default="empty", help=f"World name ({WORLD_NAMES}) or an MJCF file. Default: %(default)s."
-    )
-    parser.add_argument(
-        "--chassis",
-        choices=CHASSIS_NAMES,
-        help="Robot build. Default: the one whose motors the program constructs (st3032 otherwise).",
-    )
-    parser.add_argument(
-        "--x", type=_finite, help="Start x on the mat, in metres. Default: the world's start."
-    )
-    parser.add_argument(
-        "--y", type=_finite, help="Start y on the mat, in metres. Default: the world's start."
-    )
-    parser.add_argument(
-        "--yaw",
-        type=_finite,
-        help="Start heading, degrees counter-clockwise from +x. Default: the world's start.",
-    )
-    parser.add_argument(
-        "--seed",
-        type=seed_argument,
-        default=0,
-        help="Seed of the world's random layout (props, noise); one seed always gives one run. Default: 0.",
-    )
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -125,13 +64,14 @@ def build_parser() -> argparse.ArgumentParser:
             "the physics for --duration seconds instead and print where the robot ended (a smoke test)."
         ),
     )
-    _start_options(preview)
+    add_place_arguments(preview)
+    add_seed_argument(preview)
     preview.add_argument(
         "--headless", action="store_true", help="Do not open a window; just step the physics."
     )
     preview.add_argument(
         "--duration",
-        type=_positive,
+        type=positive_argument,
         default=2.0,
         help="Seconds of physics with --headless. Default: %(default)s.",
     )
@@ -145,7 +85,8 @@ def build_parser() -> argparse.ArgumentParser:
         ),
     )
     run.add_argument("script", metavar="SCRIPT", help="The program file, as you would run it on a hub.")
-    _start_options(run)
+    add_place_arguments(run)
+    add_seed_argument(run)
     run.add_argument("--viewer", action="store_true", help="Watch the run in the 3D viewer.")
     run.add_argument(
         "--no-shim",
@@ -156,69 +97,11 @@ def build_parser() -> argparse.ArgumentParser:
         ),
     )
     run.add_argument(
-        "--speed",
-        type=_positive,
-        help="Pace the run at this multiple of real time (1 = real time). Default: unpaced.",
-    )
-    run.add_argument(
-        "--duration",
-        type=_positive,
-        default=60.0,
-        help="Simulated seconds before the run is cut off (exit time_limit). Default: %(default)s.",
-    )
-    run.add_argument(
-        "--wall-limit",
-        type=limit_argument,
-        default=None,
-        metavar="SECONDS",
-        help=(
-            "Wall-clock seconds the run may take, 0 for no limit (it stops a loop that never lets "
-            "simulated time pass). Default: --duration (twice --duration / --speed when paced), at "
-            "least 10; none with --viewer."
-        ),
-    )
-    run.add_argument(
-        "--cpu-limit",
-        type=limit_argument,
-        default=None,
-        metavar="SECONDS",
-        help="Processor seconds the run's process may use, 0 for no limit. Default: the wall limit + 5.",
-    )
-    run.add_argument(
-        "--memory-mb",
-        type=int,
-        default=DEFAULT_MEMORY_MB,
-        metavar="MB",
-        help="Memory (address space) of the run's process, 0 for no limit. Default: %(default)s.",
-    )
-    run.add_argument(
         "--json",
         action="store_true",
         help="Print one JSON object (exit reason, final pose, score, simulated and wall time), not text.",
     )
-    run.add_argument(
-        "--hub-dir",
-        metavar="DIR",
-        help=(
-            "The hub's flash for this run: the program's files (open('/qtr.cal', 'w')) land in DIR and "
-            "stay for the next run. Default: a fresh temporary flash, removed after the run."
-        ),
-    )
-    run.add_argument(
-        "--range-finder",
-        choices=RANGE_FINDERS,
-        default="vl53l0x",
-        help="The laser range finder on the I2C mux's channel 7. Default: %(default)s.",
-    )
-    run.add_argument(
-        "--bare-0x29",
-        choices=BARE_0X29_PARTS,
-        help=(
-            "Wire this one 0x29 part straight to the I2C bus (SDA 15, SCL 16) with no mux in between, as "
-            "a build with a single colour sensor or range finder has it. Default: every 0x29 part behind "
-            "the mux."
-        ),
-    )
+    add_run_arguments(run)
     return parser
 
 
@@ -246,15 +129,7 @@ def _require_mujoco() -> None:
 
 
 def _start_pose(args, world) -> tuple[float, float, float] | None:
-    """(x_mm, y_mm, heading_deg) from the metre/yaw options, the world's start filling the gaps."""
-    if args.x is None and args.y is None and args.yaw is None:
-        return None
-    x_mm, y_mm, heading_deg = world.start_mm_deg
-    return (
-        x_mm if args.x is None else args.x * 1000.0,
-        y_mm if args.y is None else args.y * 1000.0,
-        heading_deg if args.yaw is None else -args.yaw,
-    )
+    return start_pose(args, world.start_mm_deg)
 
 
 def _world(name: str):
@@ -361,71 +236,20 @@ def _check_syntax(source: str, filename: str) -> None:
 def _run_contained(args, world, script) -> int:
     """The program runs in a child process under limits (run_process.py); this process waits, passes
     Ctrl-C on, and prints the JSON summary for --json (the child prints text reports itself)."""
-    from openbricks_sim.limits import default_cpu_s, default_wall_s
     from openbricks_sim.run_process import run_in_child
 
-    limit_ms = int(round(args.duration * 1000))
-    wall_s = args.wall_limit
-    if wall_s is None:
-        wall_s = 0 if args.viewer else default_wall_s(limit_ms, args.speed)
-    cpu_s = args.cpu_limit
-    if cpu_s is None:
-        cpu_s = default_cpu_s(wall_s) or 0
-    child_args = [
-        str(script),
-        "--world",
-        args.world,
-        "--seed",
-        str(args.seed),
-        "--limit-ms",
-        str(limit_ms),
-        "--wall-limit-s",
-        repr(float(wall_s)),
-        "--cpu-limit-s",
-        repr(float(cpu_s)),
-        "--memory-mb",
-        str(args.memory_mb),
-        "--range-finder",
-        args.range_finder,
-    ]
-    start = _start_pose(args, world)
-    if start is not None:
-        child_args += ["--start", *(repr(float(v)) for v in start)]
-    if args.speed is not None:
-        child_args += ["--speed", repr(float(args.speed))]
-    if args.hub_dir is not None:
-        child_args += ["--hub-dir", args.hub_dir]
-    if args.chassis is not None:  # else the child builds the robot the program describes
-        child_args += ["--chassis", args.chassis]
-    if args.bare_0x29 is not None:
-        child_args += ["--bare-0x29", args.bare_0x29]
-    if args.viewer:
-        child_args.append("--viewer")
+    try:
+        job = job_from_args(args, str(script))
+    except JobError as exc:
+        raise SimCliError(str(exc)) from None
+    result, status = run_in_child(job, viewer=args.viewer, silent=args.json)
     if args.json:
-        child_args.append("--json")
-    result, status = run_in_child(child_args, wall_limit_s=wall_s or None, cpu_limit_s=cpu_s or None)
-    if args.json:
-        print(json.dumps(_summary(result)))
-    elif not result.job:  # the child died without reporting: say why here
+        print(json.dumps(result.summary()))
+    elif "limits" not in result.job:  # the child died without reporting: say why here
         from openbricks_sim.run import report
 
         report(result)
     return status
-
-
-def _summary(result) -> dict:
-    """The fields a script collects across seeds; the program's printed output is included too."""
-    return {
-        "exit": result.exit,
-        "pose": result.pose,
-        "score": result.score,
-        "sim_s": result.sim_ms / 1000,
-        "wall_s": result.wall_s,
-        "real_time_factor": result.real_time_factor,
-        "error": result.error,
-        "output": result.output,
-        "job": result.job,
-    }
 
 
 def _run_unshimmed(args, world, script, source) -> int:

@@ -28,61 +28,35 @@ import signal
 import sys
 import threading
 import time
-from dataclasses import asdict, dataclass, field
+from dataclasses import replace
 
 from . import limits
-from .cli import limit_argument, seed_argument
 from .clock import SimStopped, SimTimeLimit
-from .limits import DEFAULT_MEMORY_MB, CpuLimitExceeded, contain, default_cpu_s, default_wall_s
+from .job import (
+    CPU_LIMIT,
+    ERROR,
+    EXIT_STATUS,
+    FINISHED,
+    MEMORY_LIMIT,
+    RESET,
+    STOPPED,
+    TIME_LIMIT,
+    WALL_LIMIT,
+    JobError,
+    SimJob,
+    SimResult,
+    add_place_arguments,
+    add_run_arguments,
+    add_seed_argument,
+    job_from_args,
+)
+from .limits import CpuLimitExceeded, contain
 from .program_robot import ProgramRobot, infer_chassis
 from .python_cost import PythonCost
 from .run_flash import HubDirError, RunFlash, prepare_hub_dir
-from .sensors.rig import BARE_0X29, RANGE_FINDERS
 from .shim import Shim
 from .simulation import Simulation
 from .worlds import final_state
-
-FINISHED = "finished"  # the program returned (or called sys.exit())
-ERROR = "error"  # it raised
-TIME_LIMIT = "time_limit"  # simulated time ran out
-WALL_LIMIT = "wall_limit"  # it ran too long on the wall clock (a loop that never lets time pass)
-CPU_LIMIT = "cpu_limit"  # it used up the processor time of its process
-MEMORY_LIMIT = "memory_limit"  # it ran out of the memory of its process
-STOPPED = "stopped"  # stopped from outside (Ctrl-C, a stopped job)
-RESET = "reset"  # machine.reset()
-BARE_PARTS = tuple(part for part in BARE_0X29 if part is not None)  # --bare-0x29 choices
-
-# The exit status of a run, by its exit reason: 0 it finished or used its simulated time, 1 it
-# raised (or reset the hub), 3 a limit of its process stopped it, 130 it was interrupted.
-EXIT_LIMIT = 3
-EXIT_STOPPED = 130
-EXIT_STATUS = {
-    FINISHED: 0,
-    TIME_LIMIT: 0,
-    ERROR: 1,
-    RESET: 1,
-    WALL_LIMIT: EXIT_LIMIT,
-    CPU_LIMIT: EXIT_LIMIT,
-    MEMORY_LIMIT: EXIT_LIMIT,
-    STOPPED: EXIT_STOPPED,
-}
-
-
-@dataclass
-class RunResult:
-    exit: str
-    sim_ms: int
-    wall_s: float
-    pose: dict
-    output: str
-    error: str | None = None  # traceback text when exit == "error"
-    real_time_factor: float | None = None
-    peak_rss_mb: float | None = None
-    job: dict = field(default_factory=dict)  # the inputs: program, world, chassis, seed, start, limits
-    score: dict | None = None  # the world's scoring hook on the final state; None: no mission
-
-    def to_json(self) -> str:
-        return json.dumps(asdict(self))
 
 
 class _Output(io.TextIOBase):
@@ -119,7 +93,7 @@ class ProgramRun:
     def request_stop(self):
         self.simulation.clock.request_stop()
 
-    def run(self, source, filename="main.py", wall_limit_s=None, echo=None, job=None) -> RunResult:
+    def run(self, source, filename="main.py", wall_limit_s=None, echo=None, job=None) -> SimResult:
         sim = self.simulation
         code = compile(source, filename, "exec")
         output = _Output(echo)
@@ -172,7 +146,7 @@ class ProgramRun:
         sim_ms = sim.clock.now_ms()
         scoring = sim.physics.world.score
         score = scoring(final_state(sim.physics.model, sim.physics.data)) if scoring else None
-        return RunResult(
+        return SimResult(
             exit=exit_reason,
             sim_ms=sim_ms,
             wall_s=round(wall_s, 4),
@@ -263,63 +237,30 @@ def report(result, stream=None) -> None:
     stream.flush()
 
 
-def run_program(
-    program,
-    world="empty",
-    chassis=None,
-    seed=0,
-    start_mm_deg=None,
-    speed=None,
-    limit_ms=60_000,
-    wall_limit_s=None,
-    echo=None,
-    source=None,
-    hub_dir=None,
-    range_finder="vl53l0x",
-    bare_0x29=None,
-) -> RunResult:
-    """Run the program file `program` (or `source`, named `program`) and return its RunResult.
+def run_job(job: SimJob, source=None, echo=None, watched=False) -> SimResult:
+    """Run `job` in this process (only in a process of its own: the shim patches process-wide state).
 
-    chassis: "st3032" or "jgb37"; None builds the robot whose motors the program constructs.
-
-    hub_dir: the hub's flash directory, kept after the run (None: a temporary one, removed).
-    range_finder, bare_0x29: the sensor rig's parts (sensors/rig.py): "vl53l0x" or "vl53l1x" on the
-    mux; and the one 0x29 part wired straight to the I2C bus without a mux, if any.
+    source: the program's text (None: read job.program). echo(text): live output. The chassis the
+    program describes and the hub flash are resolved here and recorded in the result's job.
     """
     if source is None:
-        with open(program, encoding="utf-8") as f:
+        with open(job.program, encoding="utf-8") as f:
             source = f.read()
-    if chassis is None:
-        chassis = infer_chassis(source)
-    hub_dir = prepare_hub_dir(hub_dir)
-    job = {
-        "program": os.fspath(program),
-        "world": world,
-        "chassis": chassis,
-        "seed": seed,
-        "start_mm_deg": list(start_mm_deg) if start_mm_deg is not None else None,
-        "speed": speed,
-        "limit_ms": limit_ms,
-        "hub_dir": hub_dir,
-        "range_finder": range_finder,
-        "bare_0x29": bare_0x29,
-    }
-    sim = Simulation(
-        world,
-        chassis,
-        seed,
-        start_mm_deg,
-        speed=speed,
-        limit_ms=limit_ms,
-        range_finder=range_finder,
-        bare_0x29=bare_0x29,
-    )
+    if job.chassis is None:
+        job = replace(job, chassis=infer_chassis(source))
+    job = replace(job, hub_dir=prepare_hub_dir(job.hub_dir))
+    sim = Simulation.for_job(job)
     try:
-        return ProgramRun(sim, hub_dir).run(
-            source, os.path.basename(os.fspath(program)), wall_limit_s, echo, job
+        return ProgramRun(sim, job.hub_dir).run(
+            source, os.path.basename(job.program), job.wall_limit(watched), echo, job.to_dict()
         )
     finally:
         sim.close()
+
+
+def run_program(program, source=None, echo=None, **fields) -> SimResult:
+    """run_job(SimJob(program, **fields)): the keyword form, for scripts and tests."""
+    return run_job(SimJob(os.fspath(program), **fields), source, echo)
 
 
 def _peak_rss_mb():
@@ -348,51 +289,11 @@ def main(argv=None) -> int:
         prog="python -m openbricks_sim.run",
         description="Run a hub program in the simulator, in this process, fenced in by limits.",
     )
-    parser.add_argument("program", help="the program file, as you would run it on the hub")
-    parser.add_argument("--world", default="empty", help="world alias or MJCF file (default: empty)")
-    parser.add_argument(
-        "--chassis",
-        help="st3032 or jgb37 (default: the build whose motors the program constructs, else st3032)",
-    )
-    parser.add_argument("--seed", type=seed_argument, default=0)
-    parser.add_argument("--start", type=float, nargs=3, metavar=("X_MM", "Y_MM", "HEADING_DEG"))
-    parser.add_argument(
-        "--speed", type=float, help="pace to wall time x SPEED (default: as fast as possible)"
-    )
-    parser.add_argument("--limit-ms", type=int, default=60_000, help="simulated time limit (default: 60000)")
-    parser.add_argument(
-        "--wall-limit-s",
-        type=limit_argument,
-        help="wall-clock limit of the run, 0 for none (default: from --limit-ms and --speed)",
-    )
-    parser.add_argument(
-        "--cpu-limit-s",
-        type=limit_argument,
-        help="processor-time limit of this process, 0 for none (default: the wall limit + 5 s)",
-    )
-    parser.add_argument(
-        "--hub-dir",
-        help="the hub's flash: a directory whose files the program sees at the hub's root, and keeps "
-        "(default: a fresh temporary flash for this run)",
-    )
-    parser.add_argument(
-        "--range-finder",
-        choices=RANGE_FINDERS,
-        default="vl53l0x",
-        help="the laser range finder on the mux's channel 7 (default: vl53l0x)",
-    )
-    parser.add_argument(
-        "--bare-0x29",
-        choices=BARE_PARTS,
-        help="the one 0x29 part wired straight to the I2C bus, with no mux in between "
-        "(a TCS34725 over the left colour site, or the range finder)",
-    )
-    parser.add_argument(
-        "--memory-mb",
-        type=int,
-        default=DEFAULT_MEMORY_MB,
-        help=f"address-space limit of this run's process, 0 for none (default: {DEFAULT_MEMORY_MB})",
-    )
+    parser.add_argument("program", nargs="?", help="the program file, as you would run it on the hub")
+    add_place_arguments(parser)
+    add_seed_argument(parser)
+    add_run_arguments(parser)
+    parser.add_argument("--job", help="the whole job as JSON (SimJob.to_json()), instead of the options")
     parser.add_argument(
         "--viewer",
         action="store_true",
@@ -404,50 +305,35 @@ def main(argv=None) -> int:
     )
     args = parser.parse_args(argv)
     try:
-        prepare_hub_dir(args.hub_dir)
-    except HubDirError as exc:
+        if args.job is not None:
+            job = SimJob.from_dict(json.loads(args.job))
+        elif args.program is None:
+            parser.error("give the program file (or --job)")
+        else:
+            job = job_from_args(args, args.program)
+        prepare_hub_dir(job.hub_dir)
+    except (HubDirError, JobError, ValueError) as exc:
         parser.error(str(exc))
     result_out = os.fdopen(args.result_fd, "w", encoding="utf-8") if args.result_fd is not None else None
-    wall_s = args.wall_limit_s
-    if wall_s is None:
-        wall_s = None if args.viewer else default_wall_s(args.limit_ms, args.speed)
-    cpu_s = args.cpu_limit_s
-    if cpu_s is None:
-        cpu_s = default_cpu_s(wall_s)
-    contain(memory_mb=args.memory_mb, cpu_s=cpu_s)
+    wall_s = job.wall_limit(watched=args.viewer)
+    cpu_s = job.cpu_limit(watched=args.viewer)
+    contain(memory_mb=job.memory_mb, cpu_s=cpu_s)
     # Ctrl-C reaches us as the CLI's forwarded SIGINT: a KeyboardInterrupt, even when this process
     # was started with SIGINT ignored (a background job of a script).
     signal.signal(signal.SIGINT, signal.default_int_handler)
     stdout = sys.stdout
     echo = None if args.json else _echo_to(stdout)
-    options = dict(
-        world=args.world,
-        chassis=args.chassis,
-        seed=args.seed,
-        start_mm_deg=tuple(args.start) if args.start else None,
-        speed=args.speed,
-        limit_ms=args.limit_ms,
-        echo=echo,
-        hub_dir=args.hub_dir,
-        range_finder=args.range_finder,
-        bare_0x29=args.bare_0x29,
-    )
     on_result = None if args.json else report
     if args.viewer:
         from .viewer import print_url, serve_run
 
-        result = serve_run(
-            args.program,
-            **{**options, "speed": 1.0 if args.speed is None else args.speed},
-            on_ready=print_url,
-            on_result=on_result,
-        )
+        result = serve_run(job, echo=echo, on_ready=print_url, on_result=on_result)
     else:
-        result = run_program(args.program, wall_limit_s=wall_s or None, **options)
+        result = run_job(job, echo=echo)
         if on_result is not None:
             on_result(result)
     signal.signal(signal.SIGXCPU, signal.SIG_IGN)  # the result is out: only the hard limit remains
-    result.job["limits"] = {"wall_s": wall_s or None, "cpu_s": cpu_s or None, "memory_mb": args.memory_mb}
+    result.job["limits"] = {"wall_s": wall_s, "cpu_s": cpu_s, "memory_mb": job.memory_mb}
     if result_out is not None:
         with result_out:
             result_out.write(result.to_json() + "\n")

@@ -1,6 +1,6 @@
 """`openbricks sim run`'s side of a run: the program runs in a child process, never in the CLI's.
 
-    result, status = run_in_child(["square.py", "--world", "wro", "--json"], wall_limit_s=60)
+    result, status = run_in_child(SimJob("square.py", world="wro"), quiet=True)
 
 The child is `python -m openbricks_sim.run` (run.py), which fences itself in (limits.contain:
 memory, CPU time, file size, no new processes), runs the program, prints its output and report
@@ -25,7 +25,7 @@ import sys
 import threading
 import time
 
-from .run import CPU_LIMIT, ERROR, EXIT_STATUS, STOPPED, WALL_LIMIT, RunResult
+from .job import CPU_LIMIT, ERROR, EXIT_STATUS, STOPPED, WALL_LIMIT, SimJob, SimResult
 
 GRACE_S = 10.0  # start-up (imports, the world's build) plus the child's own wall-limit handling
 FORWARDED_SIGNALS = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
@@ -41,14 +41,25 @@ CHILD_MAIN = (
 )
 
 
-def run_in_child(child_args, wall_limit_s=None, cpu_limit_s=None) -> tuple[RunResult, int]:
-    """Run `python -m openbricks_sim.run CHILD_ARGS --result-fd N`; (its RunResult, exit status).
+def run_in_child(job: SimJob, viewer=False, silent=False, quiet=False) -> tuple[SimResult, int]:
+    """Run `job` in `python -m openbricks_sim.run --job JSON --result-fd N`; (its SimResult, exit status).
 
-    wall_limit_s / cpu_limit_s: the limits the child was given (None: none), for the backstop and
-    for naming what killed a child that left no result.
+    viewer: serve the 3D view (the child runs until interrupted). By default the program's output
+    and the report go to the terminal we share, as a run on the hub would; silent: the child prints
+    neither (they are in the result: `sim run --json`); quiet: silent, and whatever else the child
+    writes is discarded too (a sweep's hundred children on one terminal).
+    Off the main thread (a sweep's worker) no signal is forwarded: Python handles signals only there.
     """
+    wall_limit_s = job.wall_limit(watched=viewer)
+    cpu_limit_s = job.cpu_limit(watched=viewer)
+    child_args = ["--job", job.to_json()]
+    if viewer:
+        child_args.append("--viewer")
+    if silent or quiet:
+        child_args.append("--json")
     interrupts = []
     children = []
+    on_main_thread = threading.current_thread() is threading.main_thread()
 
     def interrupt(signum, _frame):
         interrupts.append(signum)
@@ -58,7 +69,9 @@ def run_in_child(child_args, wall_limit_s=None, cpu_limit_s=None) -> tuple[RunRe
 
     # Installed before the child starts: it then begins with SIGINT at its default (a Python handler
     # is reset by exec, an ignored signal would stay ignored) and sees the interrupt we pass on.
-    previous = {signum: signal.signal(signum, interrupt) for signum in FORWARDED_SIGNALS}
+    previous = {}
+    if on_main_thread:
+        previous = {signum: signal.signal(signum, interrupt) for signum in FORWARDED_SIGNALS}
     read_end, write_end = os.pipe()
     sys.stdout.flush()
     sys.stderr.flush()
@@ -69,6 +82,8 @@ def run_in_child(child_args, wall_limit_s=None, cpu_limit_s=None) -> tuple[RunRe
             child = subprocess.Popen(
                 [sys.executable, "-c", CHILD_MAIN, *child_args, "--result-fd", str(write_end)],
                 stdin=subprocess.DEVNULL,
+                stdout=subprocess.DEVNULL if quiet else None,
+                stderr=subprocess.DEVNULL if quiet else None,
                 pass_fds=(write_end,),
                 start_new_session=True,
             )
@@ -94,10 +109,10 @@ def run_in_child(child_args, wall_limit_s=None, cpu_limit_s=None) -> tuple[RunRe
     wall_s = round(time.monotonic() - started, 4)
     text = b"".join(chunks).decode("utf-8", "replace").strip()
     if text:
-        result = RunResult(**json.loads(text))
+        result = SimResult(**json.loads(text))
     else:
         result = _lost_result(
-            child.returncode, wall_s, killed_for_time, bool(interrupts), wall_limit_s, cpu_limit_s
+            child.returncode, wall_s, killed_for_time, bool(interrupts), wall_limit_s, cpu_limit_s, quiet
         )
     if interrupts and result.exit == STOPPED:
         return result, EXIT_STATUS[STOPPED]
@@ -113,7 +128,7 @@ def _read_all(fd, chunks):
             chunks.append(chunk)
 
 
-def _lost_result(returncode, wall_s, killed_for_time, interrupted, wall_limit_s, cpu_limit_s):
+def _lost_result(returncode, wall_s, killed_for_time, interrupted, wall_limit_s, cpu_limit_s, quiet):
     """The result of a child that ended without sending one: what ended it, in one line."""
     if killed_for_time:
         exit_reason = WALL_LIMIT
@@ -134,5 +149,6 @@ def _lost_result(returncode, wall_s, killed_for_time, interrupted, wall_limit_s,
     else:
         exit_reason = ERROR
         how = f"was killed by signal {-returncode}" if returncode < 0 else f"exited with status {returncode}"
-        error = f"the simulator's process {how} without a result (its messages are above)"
-    return RunResult(exit=exit_reason, sim_ms=0, wall_s=wall_s, pose={}, output="", error=error)
+        where = "" if quiet else " (its messages are above)"
+        error = f"the simulator's process {how} without a result{where}"
+    return SimResult(exit=exit_reason, sim_ms=0, wall_s=wall_s, pose={}, output="", error=error)

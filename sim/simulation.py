@@ -53,6 +53,20 @@ class Simulation:
             self.physics.close()
             raise
 
+    @classmethod
+    def for_job(cls, job, paced=True):
+        """The simulation a SimJob runs in; paced=False leaves the pace to someone else (a viewer)."""
+        return cls(
+            job.world,
+            job.chassis,
+            job.seed,
+            job.start_mm_deg,
+            speed=job.speed if paced else None,
+            limit_ms=job.limit_ms,
+            range_finder=job.range_finder,
+            bare_0x29=job.bare_0x29,
+        )
+
     def wire_bare_colour_sensor(self, i2c_key):
         """The program built a TCS34725 straight on I2C bus `i2c_key`: wire one there (bus 0 only).
 

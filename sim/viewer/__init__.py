@@ -1,7 +1,8 @@
 """The simulator's 3D view in the browser: a run mirrored into a viser scene, with run controls.
 
+    from openbricks_sim.job import SimJob
     from openbricks_sim.viewer import serve_run
-    serve_run("square.py", world="wro", port=8080, on_ready=print)   # what `sim run --viewer` does
+    serve_run(SimJob("square.py", world="wro"), port=8080, on_ready=print)   # `sim run --viewer`
 
 `SimViewer` is the reusable part (one server, one simulation at a time, any number of browsers);
 `serve_run` (sim run --viewer) and `launch` (sim preview) are the command-line sessions around it.

@@ -12,72 +12,42 @@ import os
 import sys
 import time
 from collections.abc import Callable
+from dataclasses import replace
 
+from ..job import STOPPED, SimJob, SimResult
 from ..program_robot import infer_chassis
-from ..run import STOPPED, ProgramRun, RunResult
+from ..run import ProgramRun
 from ..simulation import Simulation
 from .viewer import DEFAULT_HOST, DEFAULT_PORT, SimViewer
 
 
 def serve_run(
-    program,
-    world: str = "empty",
-    chassis: str | None = None,
-    seed: int = 0,
-    start_mm_deg=None,
-    speed: float | None = 1.0,
-    limit_ms: int | None = 60_000,
-    echo: Callable[[str], object] | None = None,
+    job: SimJob,
     source: str | None = None,
+    echo: Callable[[str], object] | None = None,
     host: str = DEFAULT_HOST,
     port: int = DEFAULT_PORT,
     keep_open: bool = True,
     on_ready: Callable[[str], object] | None = None,
-    on_result: Callable[[RunResult], object] | None = None,
-    hub_dir=None,
-    range_finder: str = "vl53l0x",
-    bare_0x29: str | None = None,
-) -> RunResult:
-    """Run `program` (a file, or `source` named `program`) with the 3D view served at host:port.
+    on_result: Callable[[SimResult], object] | None = None,
+) -> SimResult:
+    """Run `job` (its program file, or `source`) with the 3D view served at host:port.
 
-    speed: the real-time factor runs start at (the page can change it; None = as fast as possible).
-    echo: where the program's output also goes (the terminal). on_ready(url) is called once the page
-    can be opened; on_result(result) after every run. With keep_open=False the session ends with the
-    first run; otherwise it ends on Ctrl-C (in the terminal), returning the last run's result.
-    hub_dir, range_finder, bare_0x29: as for run_program (the hub's flash, the sensor rig's parts).
+    The job's speed is the real-time factor runs start at (the page can change it; None: real
+    time, as a person watching expects). echo: where the program's output also goes (the
+    terminal). on_ready(url) is called once the page can be opened; on_result(result) after every
+    run. With keep_open=False the session ends with the first run; otherwise it ends on Ctrl-C (in
+    the terminal), returning the last run's result.
 
-    No wall-clock limit applies: a paused or slowed run is meant to take long, and the page's Stop
-    button ends a program that never lets simulated time pass.
+    No wall-clock limit applies unless the job sets one: a paused or slowed run is meant to take
+    long, and the page's Stop button ends a program that never lets simulated time pass.
     """
     if source is None:
-        with open(program, encoding="utf-8") as f:
+        with open(job.program, encoding="utf-8") as f:
             source = f.read()
-    if chassis is None:
-        chassis = infer_chassis(source)
-    filename = os.path.basename(os.fspath(program))
-    job = {
-        "program": os.fspath(program),
-        "world": world,
-        "chassis": chassis,
-        "seed": seed,
-        "start_mm_deg": list(start_mm_deg) if start_mm_deg is not None else None,
-        "speed": speed,
-        "limit_ms": limit_ms,
-        "hub_dir": None if hub_dir is None else os.fspath(hub_dir),
-        "range_finder": range_finder,
-        "bare_0x29": bare_0x29,
-        "viewer": True,
-    }
-    setup = {
-        "world": world,
-        "chassis": chassis,
-        "seed": seed,
-        "start_mm_deg": start_mm_deg,
-        "limit_ms": limit_ms,
-        "range_finder": range_finder,
-        "bare_0x29": bare_0x29,
-    }
-    with SimViewer(host, port, speed=speed) as viewer:
+    if job.chassis is None:
+        job = replace(job, chassis=infer_chassis(source))
+    with SimViewer(host, port, speed=1.0 if job.speed is None else job.speed) as viewer:
         if on_ready is not None:
             on_ready(viewer.url)
 
@@ -87,7 +57,7 @@ def serve_run(
                 echo(text)
 
         while True:
-            result = _one_run(viewer, source, filename, setup, hub_dir, tee, job)
+            result = _one_run(viewer, job, source, tee)
             if on_result is not None:
                 on_result(result)
             if viewer.restart_requested.is_set():
@@ -104,14 +74,21 @@ def serve_run(
             viewer.output.clear()
 
 
-def _one_run(viewer, source, filename, setup, hub_dir, echo, job) -> RunResult:
-    simulation = Simulation(speed=None, **setup)
+def _one_run(viewer, job, source, echo) -> SimResult:
+    """A fresh Simulation of the job, paced by the viewer (its clock runs unpaced)."""
+    simulation = Simulation.for_job(job, paced=False)
     result = None
     try:
-        run = ProgramRun(simulation, hub_dir)
+        run = ProgramRun(simulation, job.hub_dir)
         viewer.attach(simulation, stop=run.request_stop)
         try:
-            result = run.run(source, filename, None, echo, job)
+            result = run.run(
+                source,
+                os.path.basename(job.program),
+                job.wall_limit(watched=True),
+                echo,
+                {**job.to_dict(), "viewer": True},
+            )
         finally:
             viewer.detach(result)
     finally:

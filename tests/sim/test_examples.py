@@ -11,6 +11,7 @@ from pathlib import Path
 
 import pytest
 
+from openbricks_sim.job import SimJob
 from openbricks_sim.worlds import zones
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
@@ -32,23 +33,15 @@ def run_example(
     # The child must import the same builds of the extensions as this process.
     paths = {os.path.dirname(openbricks_native.__file__), os.path.dirname(openbricks_mjcontrol.__file__)}
     env["PYTHONPATH"] = os.pathsep.join([*paths, env.get("PYTHONPATH", "")])
-    command = [
-        sys.executable,
-        "-m",
-        "openbricks_sim.run",
+    job = SimJob(
         str(program),
-        "--json",
-        "--world",
-        world,
-        "--limit-ms",
-        str(limit_ms),
-    ]
-    if chassis is not None:
-        command += ["--chassis", chassis]
-    if start is not None:
-        command += ["--start", *(str(v) for v in start)]
-    if hub_dir is not None:
-        command += ["--hub-dir", str(hub_dir)]
+        world=world,
+        chassis=chassis,
+        start_mm_deg=start,
+        limit_ms=limit_ms,
+        hub_dir=None if hub_dir is None else str(hub_dir),
+    )
+    command = [sys.executable, "-m", "openbricks_sim.run", "--json", "--job", job.to_json()]
     out = subprocess.run(command, capture_output=True, text=True, timeout=300, env=env, cwd=tmp_path)
     assert out.stdout, out.stderr
     result = json.loads(out.stdout.strip().splitlines()[-1])

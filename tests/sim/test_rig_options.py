@@ -69,7 +69,7 @@ def test_openbricks_sim_run_passes_the_rig_options_and_the_hub_dir(tmp_path, cap
     summary = json.loads(capsys.readouterr().out)
     assert status == cli.EXIT_OK, summary["error"]
     assert summary["output"].startswith("red ")
-    assert summary["job"]["range_finder"] == "vl53l1x"
+    assert summary["job"]["range_finder"] == "vl53l1x" and summary["seed"] == 0
     assert (hub / "seen.txt").read_text() == "red"
 
 

@@ -140,7 +140,7 @@ def run_in_own_process(program, *options, cwd):
 def test_the_module_entry_point_runs_a_file_in_its_own_process_and_prints_json(tmp_path):
     program = tmp_path / "mission.py"
     program.write_text(DRIVE_FORWARD)
-    out = run_in_own_process(program, "--limit-ms", "5000", cwd=tmp_path)
+    out = run_in_own_process(program, "--duration", "5", cwd=tmp_path)
     assert out.returncode == 0, out.stderr
     result = json.loads(out.stdout)
     assert result["exit"] == FINISHED and result["output"].startswith("done at")

@@ -10,6 +10,7 @@ import time
 import numpy as np
 import pytest
 
+from openbricks_sim.job import SimJob
 from openbricks_sim.run import FINISHED, STOPPED, ProgramRun
 from openbricks_sim.simulation import Simulation
 from openbricks_sim.viewer import RemoteBindError, SimViewer, serve_run
@@ -224,10 +225,9 @@ def test_restart_on_the_page_runs_the_program_again_from_the_start():
 
     try:
         final = serve_run(
-            "mission.py",
+            SimJob("mission.py", speed=2.0),
             source=drive(1.5),
             port=0,
-            speed=2.0,
             keep_open=False,
             on_ready=ready,
             on_result=results.append,
