@@ -93,6 +93,28 @@ assert not process.is_running()
 # Servo settings and validation, with the manual's then= strings.
 assert servo.settings(kp=2.5)["kp"] == 2.5
 expect_error(TypeError, "unknown setting", servo.settings, kpp=1)
+
+
+def refusal(fn, *args, **kwargs):
+    """The exception's type and words: the core writes them, so both builds must say the same."""
+    try:
+        fn(*args, **kwargs)
+    except (TypeError, ValueError) as err:
+        return [type(err).__name__, str(err)]
+    raise AssertionError("%s(%r, %r) was accepted" % (fn, args, kwargs))
+
+
+results["settings_refused"] = [
+    refusal(servo.settings, **{name: value})
+    for name, value in (
+        ("kpp", 1),
+        ("stall_time_ms", 1.5),
+        ("kp", -1),
+        ("accel_dps2", 0),
+        ("silent_timeout_ms", 0),
+        ("observer_alpha", 2.0),
+    )
+] + [refusal(native.Servo, duty_limit=0), refusal(servo.set_duty_limit, 120)]
 expect_error(ValueError, "then must be one of", servo.run_target, 100, 90, "sideways")
 servo.run_target(100, 90, then="brake")
 expect_error(ValueError, "speed_dps must not be 0", servo.run_angle, 0, 90)

@@ -38,11 +38,14 @@ def host_command():
 
 
 def disagreements(hub, host):
-    """Names of the smoke values the two builds computed differently (beyond 1e-5 relative)."""
+    """Names of the smoke values the two builds computed differently (numbers beyond 1e-5 relative,
+    words at all)."""
 
     def close(a, b):
         if isinstance(b, list):
             return isinstance(a, list) and len(a) == len(b) and all(map(close, a, b))
+        if isinstance(b, str):
+            return a == b
         return math.isclose(a, b, rel_tol=1e-5, abs_tol=1e-4)
 
     if hub.keys() != host.keys():

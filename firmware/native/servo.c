@@ -9,6 +9,7 @@
 #include "servo.h"
 
 #include <math.h>
+#include <stddef.h>
 
 /* Speed runs re-base their trajectory after this long, so the time and
  * position arithmetic stays in the range where float keeps its resolution. */
@@ -51,6 +52,23 @@ static float clampf(float x, float limit) {
 static float sign_of(float x) {
     return x > 0.0f ? 1.0f : (x < 0.0f ? -1.0f : 0.0f);
 }
+
+static bool direct_read_angle(void *ctx, float *angle_deg) {
+    (void)ctx;
+    (void)angle_deg;
+    return false;
+}
+
+static void direct_write_duty(void *ctx, float duty_pct) {
+    (void)ctx;
+    (void)duty_pct;
+}
+
+static void direct_write_coast(void *ctx) {
+    (void)ctx;
+}
+
+const ob_motor_io_t ob_servo_direct_io = {direct_read_angle, direct_write_duty, direct_write_coast, NULL};
 
 /* ---- Output: only what changed reaches the hardware. ---- */
 

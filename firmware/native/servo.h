@@ -142,6 +142,10 @@ typedef struct {
  * default). */
 void ob_servo_config_default(ob_servo_config_t *cfg);
 
+/* The IO of a servo stepped directly: nothing to read (ob_servo_step is handed
+ * each reading) and nothing to write (the caller reads duty_out_pct back). */
+extern const ob_motor_io_t ob_servo_direct_io;
+
 /* Start coasting, with no angle seen yet. cfg is copied. */
 void ob_servo_init(ob_servo_t *s, const ob_motor_io_t *io, const ob_servo_config_t *cfg);
 

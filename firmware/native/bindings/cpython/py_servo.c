@@ -25,6 +25,7 @@
 #include "py_motor_io.h"
 #include "py_subscriber.h"
 #include "servo.h"
+#include "servo_settings.h"
 
 typedef struct {
     ob_py_subscriber_t base;
@@ -106,23 +107,6 @@ static void py_write_coast(void *ctx) {
     Py_DECREF(result);
 }
 
-/* The direct path: no sensor to read (update() hands the reading in), and the
- * output is read back from the core's state after the step. */
-static bool direct_read_angle(void *ctx, float *angle_deg) {
-    (void)ctx;
-    (void)angle_deg;
-    return false;
-}
-
-static void direct_write_duty(void *ctx, float duty_pct) {
-    (void)ctx;
-    (void)duty_pct;
-}
-
-static void direct_write_coast(void *ctx) {
-    (void)ctx;
-}
-
 /* Subscriber tick: the core's tick, then any callable error for motor_process. */
 static void servo_tick_fn(void *ctx, uint32_t now_ms) {
     ServoObject *self = (ServoObject *)ctx;
@@ -130,92 +114,34 @@ static void servo_tick_fn(void *ctx, uint32_t now_ms) {
     raise_stashed(self);
 }
 
-/* ---- Settings: one table drives the constructor, settings() and validation. ---- */
+/* ---- Settings: the core's table (servo_settings.h) checks them; this only parses. ---- */
 
-typedef enum { SETTING_FLOAT, SETTING_MS } setting_kind_t;
-
-typedef struct {
-    const char *name;
-    size_t offset;
-    setting_kind_t kind;
-    float min;        /* smallest allowed value */
-    bool min_open;    /* min itself is excluded */
-    float max;        /* largest allowed value */
-} setting_t;
-
-#define CFG(field) offsetof(ob_servo_config_t, field)
-#define BIG 3.0e38f
-
-static const setting_t settings_table[] = {
-    {"kp", CFG(kp_pct_per_deg), SETTING_FLOAT, 0.0f, false, BIG},
-    {"ki", CFG(ki_pct_per_deg_s), SETTING_FLOAT, 0.0f, false, BIG},
-    {"kd", CFG(kd_pct_per_dps), SETTING_FLOAT, 0.0f, false, BIG},
-    {"integral_band_deg", CFG(integral_band_deg), SETTING_FLOAT, 0.0f, false, BIG},
-    {"integral_limit_pct", CFG(integral_limit_pct), SETTING_FLOAT, 0.0f, false, 100.0f},
-    {"speed_kp", CFG(speed_kp_pct_per_dps), SETTING_FLOAT, 0.0f, false, BIG},
-    {"speed_ki", CFG(speed_ki_pct_per_deg), SETTING_FLOAT, 0.0f, false, BIG},
-    {"ff_speed", CFG(ff_pct_per_dps), SETTING_FLOAT, 0.0f, false, BIG},
-    {"ff_accel", CFG(ff_pct_per_dps2), SETTING_FLOAT, 0.0f, false, BIG},
-    {"ff_static", CFG(ff_static_pct), SETTING_FLOAT, 0.0f, false, 100.0f},
-    {"max_speed_dps", CFG(max_speed_dps), SETTING_FLOAT, 0.0f, true, BIG},
-    {"accel_dps2", CFG(accel_dps2), SETTING_FLOAT, 0.0f, true, BIG},
-    {"decel_dps2", CFG(decel_dps2), SETTING_FLOAT, 0.0f, true, BIG},
-    {"position_tolerance_deg", CFG(position_tolerance_deg), SETTING_FLOAT, 0.0f, true, BIG},
-    {"speed_tolerance_dps", CFG(speed_tolerance_dps), SETTING_FLOAT, 0.0f, true, BIG},
-    {"stall_error_deg", CFG(stall_error_deg), SETTING_FLOAT, 0.0f, true, BIG},
-    {"stall_speed_dps", CFG(stall_speed_dps), SETTING_FLOAT, 0.0f, true, BIG},
-    {"stall_time_ms", CFG(stall_time_ms), SETTING_MS, 0.0f, false, 4.0e9f},
-    {"silent_timeout_ms", CFG(silent_timeout_ms), SETTING_MS, 1.0f, false, 4.0e9f},
-    {"counts_per_rev", CFG(counts_per_rev), SETTING_FLOAT, 0.0f, true, BIG},
-    {"observer_alpha", CFG(observer_alpha), SETTING_FLOAT, 0.0f, true, 1.0f},
-    {"observer_beta", CFG(observer_beta), SETTING_FLOAT, 0.0f, true, 1.0f},
-};
-
-#define N_SETTINGS (sizeof(settings_table) / sizeof(settings_table[0]))
-
-static const char setting_names[] =
-    "kp, ki, kd, integral_band_deg, integral_limit_pct, speed_kp, speed_ki, ff_speed, ff_accel, ff_static, "
-    "max_speed_dps, accel_dps2, decel_dps2, position_tolerance_deg, speed_tolerance_dps, stall_error_deg, "
-    "stall_speed_dps, stall_time_ms, silent_timeout_ms, counts_per_rev, observer_alpha, observer_beta";
-
-static const setting_t *find_setting(const char *name) {
-    for (size_t i = 0; i < N_SETTINGS; i++) {
-        if (strcmp(settings_table[i].name, name) == 0) {
-            return &settings_table[i];
+static int set_one(ob_servo_config_t *cfg, const char *name, PyObject *value, const char *where) {
+    char msg[OB_SERVO_SETTING_MSG_SIZE];
+    const ob_servo_setting_t *setting = ob_servo_setting_find(name, where, msg, sizeof(msg));
+    if (setting == NULL) {
+        PyErr_SetString(PyExc_TypeError, msg);
+        return -1;
+    }
+    bool is_int = PyLong_Check(value) && !PyBool_Check(value);
+    double number = 0.0;
+    if (is_int || !setting->is_ms) {
+        float parsed;
+        if (ob_py_float(value, where, setting->name, &parsed) < 0) {
+            return -1;
         }
+        number = is_int ? PyLong_AsDouble(value) : (double)parsed;
     }
-    return NULL;
-}
-
-static int set_one(ob_servo_config_t *cfg, const setting_t *setting, PyObject *value, const char *where) {
-    float number;
-    if (setting->kind == SETTING_MS && (PyBool_Check(value) || !PyLong_Check(value))) {
-        PyErr_Format(PyExc_TypeError, "%s: %s must be an int (milliseconds), not %.100s", where, setting->name,
-                     Py_TYPE(value)->tp_name);
+    ob_setting_status_t status =
+        ob_servo_setting_set(cfg, setting, number, is_int, Py_TYPE(value)->tp_name, where, msg, sizeof(msg));
+    if (status != OB_SETTING_OK) {
+        PyErr_SetString(status == OB_SETTING_TYPE_ERROR ? PyExc_TypeError : PyExc_ValueError, msg);
         return -1;
-    }
-    if (ob_py_float(value, where, setting->name, &number) < 0) {
-        return -1;
-    }
-    bool low = setting->min_open ? !(number > setting->min) : number < setting->min;
-    if (low || number > setting->max) {
-        /* PyErr_Format has no %g: format the bound first. */
-        char bound[48];
-        PyOS_snprintf(bound, sizeof(bound), "%s %g", low ? (setting->min_open ? ">" : ">=") : "<=",
-                      (double)(low ? setting->min : setting->max));
-        PyErr_Format(PyExc_ValueError, "%s: %s must be %s, got %R", where, setting->name, bound, value);
-        return -1;
-    }
-    char *field = (char *)cfg + setting->offset;
-    if (setting->kind == SETTING_MS) {
-        *(uint32_t *)field = (uint32_t)PyLong_AsUnsignedLong(value);
-    } else {
-        *(float *)field = number;
     }
     return 0;
 }
 
-/* Apply keyword settings onto cfg; unknown names are an error listing the valid ones. */
+/* Apply keyword settings onto cfg, skipping the constructor's own arguments. */
 static int apply_settings(ob_servo_config_t *cfg, PyObject *kwargs, const char *where, const char *const *skip) {
     if (kwargs == NULL) {
         return 0;
@@ -231,16 +157,7 @@ static int apply_settings(ob_servo_config_t *cfg, PyObject *kwargs, const char *
         for (const char *const *s = skip; s != NULL && *s != NULL; s++) {
             skipped = skipped || strcmp(*s, name) == 0;
         }
-        if (skipped) {
-            continue;
-        }
-        const setting_t *setting = find_setting(name);
-        if (setting == NULL) {
-            PyErr_Format(PyExc_TypeError, "%s: unknown setting %R; the settings are: %s", where, key,
-                         setting_names);
-            return -1;
-        }
-        if (set_one(cfg, setting, value, where) < 0) {
+        if (!skipped && set_one(cfg, name, value, where) < 0) {
             return -1;
         }
     }
@@ -249,20 +166,14 @@ static int apply_settings(ob_servo_config_t *cfg, PyObject *kwargs, const char *
 
 static PyObject *settings_dict(const ob_servo_config_t *cfg) {
     PyObject *dict = PyDict_New();
-    if (dict == NULL) {
-        return NULL;
-    }
-    for (size_t i = 0; i < N_SETTINGS; i++) {
-        const char *field = (const char *)cfg + settings_table[i].offset;
-        PyObject *value = settings_table[i].kind == SETTING_MS
-                              ? PyLong_FromUnsignedLong(*(const uint32_t *)field)
-                              : PyFloat_FromDouble((double)*(const float *)field);
-        if (value == NULL || PyDict_SetItemString(dict, settings_table[i].name, value) < 0) {
-            Py_XDECREF(value);
-            Py_DECREF(dict);
-            return NULL;
+    for (size_t i = 0; dict != NULL && i < OB_SERVO_SETTINGS_COUNT; i++) {
+        const ob_servo_setting_t *setting = &ob_servo_settings[i];
+        double number = ob_servo_setting_get(cfg, setting);
+        PyObject *value = setting->is_ms ? PyLong_FromDouble(number) : PyFloat_FromDouble(number);
+        if (value == NULL || PyDict_SetItemString(dict, setting->name, value) < 0) {
+            Py_CLEAR(dict);
         }
-        Py_DECREF(value);
+        Py_XDECREF(value);
     }
     return dict;
 }
@@ -346,8 +257,9 @@ static int servo_init(ServoObject *self, PyObject *args, PyObject *kwargs) {
         if (ob_py_float(duty_limit, "Servo", "duty_limit", &limit) < 0) {
             return -1;
         }
-        if (!(limit > 0.0f && limit <= 100.0f)) {
-            PyErr_Format(PyExc_ValueError, "Servo: duty_limit must be within (0, 100] percent, got %R", duty_limit);
+        char msg[OB_SERVO_SETTING_MSG_SIZE];
+        if (!ob_servo_duty_limit_valid(limit, "Servo", "duty_limit", "", msg, sizeof(msg))) {
+            PyErr_SetString(PyExc_ValueError, msg);
             return -1;
         }
     }
@@ -373,7 +285,7 @@ static int servo_init(ServoObject *self, PyObject *args, PyObject *kwargs) {
         self->base.tick_fn = servo_tick_fn;
         self->base.tick_ctx = self;
     } else {
-        io = (ob_motor_io_t){direct_read_angle, direct_write_duty, direct_write_coast, self};
+        io = ob_servo_direct_io;
         self->base.tick_fn = NULL;
         self->base.tick_ctx = NULL;
     }
@@ -395,7 +307,7 @@ static int servo_traverse(ServoObject *self, visitproc visit, void *arg) {
 static int servo_clear(ServoObject *self) {
     /* Without its callables the servo can no longer be ticked. */
     self->base.tick_fn = NULL;
-    self->servo.io = (ob_motor_io_t){direct_read_angle, direct_write_duty, direct_write_coast, self};
+    self->servo.io = ob_servo_direct_io;
     Py_CLEAR(self->read_angle);
     Py_CLEAR(self->native_io);
     Py_CLEAR(self->write_duty);
@@ -420,8 +332,7 @@ static PyObject *servo_new(PyTypeObject *type, PyObject *args, PyObject *kwargs)
         /* A usable direct-path servo even if __init__ is bypassed. */
         ob_servo_config_t cfg;
         ob_servo_config_default(&cfg);
-        ob_motor_io_t io = {direct_read_angle, direct_write_duty, direct_write_coast, self};
-        ob_servo_init(&self->servo, &io, &cfg);
+        ob_servo_init(&self->servo, &ob_servo_direct_io, &cfg);
     }
     return (PyObject *)self;
 }
@@ -552,10 +463,10 @@ static PyObject *servo_set_duty_limit(ServoObject *self, PyObject *arg) {
         if (ob_py_float(arg, "Servo.set_duty_limit", "limit_pct", &limit) < 0) {
             return NULL;
         }
-        if (!(limit > 0.0f && limit <= 100.0f)) {
-            PyErr_Format(PyExc_ValueError,
-                         "Servo.set_duty_limit: limit_pct must be within (0, 100] percent (None lifts it), got %R",
-                         arg);
+        char msg[OB_SERVO_SETTING_MSG_SIZE];
+        if (!ob_servo_duty_limit_valid(limit, "Servo.set_duty_limit", "limit_pct", " (None lifts it)", msg,
+                                       sizeof(msg))) {
+            PyErr_SetString(PyExc_ValueError, msg);
             return NULL;
         }
     }
@@ -656,22 +567,6 @@ static PyObject *servo_settings(ServoObject *self, PyObject *args, PyObject *kwa
     return settings_dict(&self->servo.cfg);
 }
 
-static const char *mode_name(ob_servo_mode_t mode) {
-    switch (mode) {
-    case OB_SERVO_BRAKE:
-        return "brake";
-    case OB_SERVO_DUTY:
-        return "dc";
-    case OB_SERVO_SPEED:
-        return "speed";
-    case OB_SERVO_POSITION:
-        return "position";
-    case OB_SERVO_COAST:
-    default:
-        return "coast";
-    }
-}
-
 static PyObject *servo_state(ServoObject *self, PyObject *unused) {
     (void)unused;
     const ob_servo_t *s = &self->servo;
@@ -680,7 +575,7 @@ static PyObject *servo_state(ServoObject *self, PyObject *unused) {
         return NULL;
     }
     PyObject *state = Py_BuildValue(
-        "{s:s,s:s,s:O,s:O,s:O,s:k,s:k,s:d,s:d,s:N,s:d,s:d,s:d,s:d,s:k}", "mode", mode_name(s->mode), "then",
+        "{s:s,s:s,s:O,s:O,s:O,s:k,s:k,s:d,s:d,s:N,s:d,s:d,s:d,s:d,s:k}", "mode", ob_servo_mode_name(s->mode), "then",
         ob_py_then_name(s->then), "done", s->done ? Py_True : Py_False, "stalled", s->stalled ? Py_True : Py_False,
         "feedback_lost", s->feedback_lost ? Py_True : Py_False, "failed_reads", (unsigned long)s->failed_reads,
         "silent_reads", (unsigned long)s->silent_ticks,

@@ -13,6 +13,7 @@
 
 #include "mp_bindings.h"
 #include "servo.h"
+#include "servo_settings.h"
 
 typedef struct {
     ob_mp_subscriber_t sub;
@@ -62,88 +63,32 @@ static void io_write_coast(void *ctx) {
     }
 }
 
-/* The direct path: update() hands the reading in and reads the output back from the core. */
-static bool direct_read_angle(void *ctx, float *angle_deg) {
-    (void)ctx;
-    (void)angle_deg;
-    return false;
-}
-
-static void direct_write_duty(void *ctx, float duty_pct) {
-    (void)ctx;
-    (void)duty_pct;
-}
-
-static void direct_write_coast(void *ctx) {
-    (void)ctx;
-}
-
 static void servo_tick_fn(void *ctx, uint32_t now_ms) {
     servo_obj_t *self = ctx;
     ob_servo_tick(&self->servo, now_ms); /* callable errors stay in sub.error for motor_process */
 }
 
-/* ---- Settings: one table drives the constructor, settings() and validation. ---- */
+/* ---- Settings: the core's table (servo_settings.h) checks them; this only parses. ---- */
 
-typedef struct {
-    const char *name;
-    size_t offset;
-    bool is_ms;     /* uint32 milliseconds rather than float */
-    float min;
-    bool min_open;  /* min itself is excluded */
-    float max;
-} setting_t;
-
-#define CFG(field) offsetof(ob_servo_config_t, field)
-#define BIG 3.0e38f
-
-static const setting_t settings_table[] = {
-    {"kp", CFG(kp_pct_per_deg), false, 0.0f, false, BIG},
-    {"ki", CFG(ki_pct_per_deg_s), false, 0.0f, false, BIG},
-    {"kd", CFG(kd_pct_per_dps), false, 0.0f, false, BIG},
-    {"integral_band_deg", CFG(integral_band_deg), false, 0.0f, false, BIG},
-    {"integral_limit_pct", CFG(integral_limit_pct), false, 0.0f, false, 100.0f},
-    {"speed_kp", CFG(speed_kp_pct_per_dps), false, 0.0f, false, BIG},
-    {"speed_ki", CFG(speed_ki_pct_per_deg), false, 0.0f, false, BIG},
-    {"ff_speed", CFG(ff_pct_per_dps), false, 0.0f, false, BIG},
-    {"ff_accel", CFG(ff_pct_per_dps2), false, 0.0f, false, BIG},
-    {"ff_static", CFG(ff_static_pct), false, 0.0f, false, 100.0f},
-    {"max_speed_dps", CFG(max_speed_dps), false, 0.0f, true, BIG},
-    {"accel_dps2", CFG(accel_dps2), false, 0.0f, true, BIG},
-    {"decel_dps2", CFG(decel_dps2), false, 0.0f, true, BIG},
-    {"position_tolerance_deg", CFG(position_tolerance_deg), false, 0.0f, true, BIG},
-    {"speed_tolerance_dps", CFG(speed_tolerance_dps), false, 0.0f, true, BIG},
-    {"stall_error_deg", CFG(stall_error_deg), false, 0.0f, true, BIG},
-    {"stall_speed_dps", CFG(stall_speed_dps), false, 0.0f, true, BIG},
-    {"stall_time_ms", CFG(stall_time_ms), true, 0.0f, false, 4.0e9f},
-    {"silent_timeout_ms", CFG(silent_timeout_ms), true, 1.0f, false, 4.0e9f},
-    {"counts_per_rev", CFG(counts_per_rev), false, 0.0f, true, BIG},
-    {"observer_alpha", CFG(observer_alpha), false, 0.0f, true, 1.0f},
-    {"observer_beta", CFG(observer_beta), false, 0.0f, true, 1.0f},
-};
-
-static const char setting_names[] =
-    "kp, ki, kd, integral_band_deg, integral_limit_pct, speed_kp, speed_ki, ff_speed, ff_accel, ff_static, "
-    "max_speed_dps, accel_dps2, decel_dps2, position_tolerance_deg, speed_tolerance_dps, stall_error_deg, "
-    "stall_speed_dps, stall_time_ms, silent_timeout_ms, counts_per_rev, observer_alpha, observer_beta";
-
-static void set_one(ob_servo_config_t *cfg, const setting_t *setting, mp_obj_t value, const char *where) {
-    if (setting->is_ms && (value == mp_const_true || value == mp_const_false || !mp_obj_is_int(value))) {
-        mp_raise_msg_varg(&mp_type_TypeError, MP_ERROR_TEXT("%s: %s must be an int (milliseconds), not %s"), where,
-                          setting->name, mp_obj_get_type_str(value));
+static void set_one(ob_servo_config_t *cfg, qstr name, mp_obj_t value, const char *where) {
+    char msg[OB_SERVO_SETTING_MSG_SIZE];
+    const ob_servo_setting_t *setting = ob_servo_setting_find(qstr_str(name), where, msg, sizeof(msg));
+    if (setting == NULL) {
+        mp_raise_msg_varg(&mp_type_TypeError, MP_ERROR_TEXT("%s"), msg);
     }
-    float number = ob_mp_float(value, where, setting->name);
-    bool low = setting->min_open ? !(number > setting->min) : number < setting->min;
-    if (low || number > setting->max) {
-        mp_raise_msg_varg(&mp_type_ValueError, MP_ERROR_TEXT("%s: %s must be %s %g, got %g"), where, setting->name,
-                          low ? (setting->min_open ? ">" : ">=") : "<=",
-                          (double)(low ? setting->min : setting->max), (double)number);
+    bool is_int = mp_obj_is_int(value) && value != mp_const_true && value != mp_const_false;
+    double number = 0.0;
+    if (is_int) {
+        ob_mp_float(value, where, setting->name); /* in range of a float */
+        number = (double)mp_obj_get_float(value);
+    } else if (!setting->is_ms) {
+        number = (double)ob_mp_float(value, where, setting->name);
     }
-    char *field = (char *)cfg + setting->offset;
-    if (setting->is_ms) {
-        *(uint32_t *)field = (uint32_t)mp_obj_get_int_truncated(value);
-    } else {
-        *(float *)field = number;
+    ob_setting_status_t status =
+        ob_servo_setting_set(cfg, setting, number, is_int, mp_obj_get_type_str(value), where, msg, sizeof(msg));
+    if (status != OB_SETTING_OK) {
+        mp_raise_msg_varg(status == OB_SETTING_TYPE_ERROR ? &mp_type_TypeError : &mp_type_ValueError,
+                          MP_ERROR_TEXT("%s"), msg);
     }
 }
 
@@ -159,30 +104,19 @@ static void apply_settings(ob_servo_config_t *cfg, mp_map_t *kw_args, const char
         for (size_t k = 0; k < n_skip; k++) {
             skipped = skipped || skip[k] == name;
         }
-        if (skipped) {
-            continue;
+        if (!skipped) {
+            set_one(cfg, name, kw_args->table[i].value, where);
         }
-        const setting_t *setting = NULL;
-        for (size_t k = 0; k < MP_ARRAY_SIZE(settings_table); k++) {
-            if (strcmp(settings_table[k].name, qstr_str(name)) == 0) {
-                setting = &settings_table[k];
-            }
-        }
-        if (setting == NULL) {
-            mp_raise_msg_varg(&mp_type_TypeError, MP_ERROR_TEXT("%s: unknown setting '%s'; the settings are: %s"), where,
-                              qstr_str(name), setting_names);
-        }
-        set_one(cfg, setting, kw_args->table[i].value, where);
     }
 }
 
 static mp_obj_t settings_dict(const ob_servo_config_t *cfg) {
-    mp_obj_t dict = mp_obj_new_dict(MP_ARRAY_SIZE(settings_table));
-    for (size_t i = 0; i < MP_ARRAY_SIZE(settings_table); i++) {
-        const char *field = (const char *)cfg + settings_table[i].offset;
-        mp_obj_t value = settings_table[i].is_ms ? mp_obj_new_int_from_uint(*(const uint32_t *)field)
-                                                 : mp_obj_new_float(*(const float *)field);
-        mp_obj_dict_store(dict, mp_obj_new_str(settings_table[i].name, strlen(settings_table[i].name)), value);
+    mp_obj_t dict = mp_obj_new_dict(OB_SERVO_SETTINGS_COUNT);
+    for (size_t i = 0; i < OB_SERVO_SETTINGS_COUNT; i++) {
+        const ob_servo_setting_t *setting = &ob_servo_settings[i];
+        double number = ob_servo_setting_get(cfg, setting);
+        mp_obj_t value = setting->is_ms ? mp_obj_new_int_from_uint((mp_uint_t)number) : mp_obj_new_float(number);
+        mp_obj_dict_store(dict, mp_obj_new_str(setting->name, strlen(setting->name)), value);
     }
     return dict;
 }
@@ -235,9 +169,9 @@ static mp_obj_t servo_make_new(const mp_obj_type_t *type, size_t n_args, size_t 
     float limit = 100.0f;
     if (duty_limit != MP_OBJ_NULL) {
         limit = ob_mp_float(duty_limit, "Servo", "duty_limit");
-        if (!(limit > 0.0f && limit <= 100.0f)) {
-            mp_raise_msg_varg(&mp_type_ValueError, MP_ERROR_TEXT("Servo: duty_limit must be within (0, 100] percent, got %g"),
-                              (double)limit);
+        char msg[OB_SERVO_SETTING_MSG_SIZE];
+        if (!ob_servo_duty_limit_valid(limit, "Servo", "duty_limit", "", msg, sizeof(msg))) {
+            mp_raise_msg_varg(&mp_type_ValueError, MP_ERROR_TEXT("%s"), msg);
         }
     }
     cfg.duty_limit_pct = limit;
@@ -247,16 +181,10 @@ static mp_obj_t servo_make_new(const mp_obj_type_t *type, size_t n_args, size_t 
     self->read_angle = read;
     self->write_duty = write;
     self->write_coast = coast;
-    ob_motor_io_t io;
-    if (given == 3) {
-        io = (ob_motor_io_t){io_read_angle, io_write_duty, io_write_coast, self};
-        self->sub.tick_fn = servo_tick_fn;
-        self->sub.tick_ctx = self;
-    } else {
-        io = (ob_motor_io_t){direct_read_angle, direct_write_duty, direct_write_coast, self};
-        self->sub.tick_fn = NULL;
-        self->sub.tick_ctx = NULL;
-    }
+    bool ticked = given == 3; /* by motor_process; else stepped with update() */
+    ob_motor_io_t io = ticked ? (ob_motor_io_t){io_read_angle, io_write_duty, io_write_coast, self} : ob_servo_direct_io;
+    self->sub.tick_fn = ticked ? servo_tick_fn : NULL;
+    self->sub.tick_ctx = ticked ? self : NULL;
     ob_servo_init(&self->servo, &io, &cfg);
     return MP_OBJ_FROM_PTR(self);
 }
@@ -390,11 +318,10 @@ static mp_obj_t servo_set_duty_limit(mp_obj_t self_in, mp_obj_t limit_in) {
     float limit = 100.0f;
     if (limit_in != mp_const_none) {
         limit = ob_mp_float(limit_in, "Servo.set_duty_limit", "limit_pct");
-        if (!(limit > 0.0f && limit <= 100.0f)) {
-            mp_raise_msg_varg(&mp_type_ValueError,
-                              MP_ERROR_TEXT("Servo.set_duty_limit: limit_pct must be within (0, 100] percent (None lifts "
-                                            "it), got %g"),
-                              (double)limit);
+        char msg[OB_SERVO_SETTING_MSG_SIZE];
+        if (!ob_servo_duty_limit_valid(limit, "Servo.set_duty_limit", "limit_pct", " (None lifts it)", msg,
+                                       sizeof(msg))) {
+            mp_raise_msg_varg(&mp_type_ValueError, MP_ERROR_TEXT("%s"), msg);
         }
     }
     ob_servo_set_duty_limit(&self->servo, limit);
@@ -472,22 +399,6 @@ static mp_obj_t servo_settings(size_t n_args, const mp_obj_t *pos_args, mp_map_t
 }
 static MP_DEFINE_CONST_FUN_OBJ_KW(servo_settings_obj, 1, servo_settings);
 
-static const char *mode_name(ob_servo_mode_t mode) {
-    switch (mode) {
-        case OB_SERVO_BRAKE:
-            return "brake";
-        case OB_SERVO_DUTY:
-            return "dc";
-        case OB_SERVO_SPEED:
-            return "speed";
-        case OB_SERVO_POSITION:
-            return "position";
-        case OB_SERVO_COAST:
-        default:
-            return "coast";
-    }
-}
-
 static void store(mp_obj_t dict, qstr key, mp_obj_t value) {
     mp_obj_dict_store(dict, MP_OBJ_NEW_QSTR(key), value);
 }
@@ -495,7 +406,7 @@ static void store(mp_obj_t dict, qstr key, mp_obj_t value) {
 static mp_obj_t servo_state(mp_obj_t self_in) {
     servo_obj_t *self = MP_OBJ_TO_PTR(self_in);
     const ob_servo_t *s = &self->servo;
-    const char *mode = mode_name(s->mode);
+    const char *mode = ob_servo_mode_name(s->mode);
     const char *then = ob_mp_then_name(s->then);
     mp_obj_t state = mp_obj_new_dict(15);
     store(state, MP_QSTR_mode, mp_obj_new_str(mode, strlen(mode)));
