@@ -33,7 +33,7 @@ from openbricks_server.daemon.recorder import INTERRUPTED_BY_CRASH, Recorder
 from openbricks_server.daemon.routers import auth as auth_router
 from openbricks_server.daemon.routers import events as events_router
 from openbricks_server.daemon.routers import hubs as hubs_router
-from openbricks_server.daemon.routers import pages, programs, runs, system
+from openbricks_server.daemon.routers import pages, programs, runs, sim, sim_view, system
 from openbricks_server.daemon.store import Store, now_ms
 
 
@@ -51,6 +51,7 @@ class DaemonContext:
     hub_events: Recorder  # implements openbricks_server.daemon.hub_events.HubEvents
     auth: Auth
     hubs: Any = None  # the HubManager, once its service has started
+    sim: Any = None  # the SimJobs (sim runs), once its service has started
     started_ms: int = field(default_factory=now_ms)
 
 
@@ -83,7 +84,21 @@ async def hub_manager(ctx: DaemonContext) -> AsyncIterator[None]:
         await ctx.hubs.close()
 
 
-SERVICES: list[Service] = [output_writer, hub_manager]
+@asynccontextmanager
+async def sim_jobs(ctx: DaemonContext) -> AsyncIterator[None]:
+    """Sim runs (child processes); at shutdown every live one is stopped and recorded."""
+    from openbricks_server.daemon.recorder import INTERRUPTED_BY_CRASH
+    from openbricks_server.daemon.sim.jobs import SimJobs
+
+    ctx.store.sim_runs.mark_failed_open(INTERRUPTED_BY_CRASH)
+    ctx.sim = SimJobs(ctx)
+    try:
+        yield
+    finally:
+        await ctx.sim.close()
+
+
+SERVICES: list[Service] = [output_writer, hub_manager, sim_jobs]
 ROUTERS = [
     system.router,
     auth_router.router,
@@ -91,6 +106,7 @@ ROUTERS = [
     runs.router,
     events_router.router,
     hubs_router.router,
+    sim.router,
 ]
 
 
@@ -145,6 +161,7 @@ def create_app(config: DaemonConfig, services: Sequence[Service] | None = None) 
     errors.install(app)
     app.add_middleware(AuthMiddleware)
     app.include_router(pages.router)
+    app.include_router(sim_view.router)
     if pages.ASSETS_DIR.is_dir():
         app.mount("/assets", StaticFiles(directory=pages.ASSETS_DIR), name="assets")
     for router in ROUTERS:

@@ -16,7 +16,8 @@ from typing import Literal, Protocol
 
 HubStatus = Literal["offline", "connecting", "idle", "running", "busy", "flashing"]
 HubKind = Literal["ble", "serial", "virtual"]
-RunOrigin = Literal["daemon", "button", "log"]  # started through the API, by the hub's button, read back
+# Started through the API, by the hub's button, read back from the run log, or a simulator run.
+RunOrigin = Literal["daemon", "button", "log", "sim"]
 RunOutcome = Literal["finished", "error", "stopped", "dropped", "interrupted"]
 
 

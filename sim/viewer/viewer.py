@@ -15,8 +15,10 @@ through an asyncio.Event that is only safe to set from that loop: pushed from an
 updates sat unsent until something else woke the sender, and the page saw 15 poses a second
 instead of 60.
 
-The CLI uses it through serve_run(); the console's daemon can hold one per sim job and hand its
-URL to the browsers that watch that job.
+The CLI uses it through serve_run(); the console's daemon holds one per sim job (a child process)
+and proxies its page to the browsers that watch that job. With record=True every run is also kept
+as a viser scene recording (`recording()`, a `.viser` file's bytes) timed by simulated time, so the
+run can be played back later at its own pace whatever speed it was watched at.
 """
 
 from __future__ import annotations
@@ -82,6 +84,7 @@ class SimViewer:
         frame_hz: float = DEFAULT_FRAME_HZ,
         allow_remote: bool = False,
         title: str = "openbricks sim",
+        record: bool = False,
     ):
         if not allow_remote and not _is_loopback(host):
             raise RemoteBindError(
@@ -103,6 +106,9 @@ class SimViewer:
         self._scene_lock = threading.Lock()  # the scene is rebuilt on one thread and drawn on another
         self._rates = deque()  # (wall_s, sim_ms) of recent frames; the publishing task's alone
         self._rate_epoch = 0  # bumped when the measured rate must start over (new run, new speed)
+        self._record = record
+        self._recorder = None  # viser's scene serializer while a run is recorded
+        self._recorded_ms = 0  # simulated time of the last frame in the recording
         self.output = OutputTail()
         self.restart_requested = threading.Event()
         self.stop_requested = threading.Event()
@@ -170,6 +176,8 @@ class SimViewer:
             self._paused = False
             self.panel.set_paused(False)
             self._frame = capture(simulation)
+            if self._record:
+                self._start_recording()
             self._state = RUNNING
             self._pacer = Pacer(clock, self._on_pacer_frame, speed=self._speed, frame_hz=self._frame_hz)
             self._pacer.start()
@@ -198,6 +206,14 @@ class SimViewer:
             self._state = result.exit if result is not None else "ended"
             if result is not None and result.error:
                 self.output.write(("\n" if self.output.lines() else "") + result.error)
+
+    def recording(self, timeout_s: float = 10.0) -> bytes:
+        """The last run as a `.viser` recording (record=True): the scene as it was when the run began,
+        then every frame drawn, ending on the frame the run ended with. Call after detach()."""
+        if self._recorder is None:
+            raise RuntimeError("nothing was recorded: build the viewer with record=True and attach a run")
+        future = asyncio.run_coroutine_threadsafe(self._end_recording(), self.server.get_event_loop())
+        return future.result(timeout_s)
 
     def write(self, text: str) -> int:
         """Program output for the Output panel (pass as the run's echo)."""
@@ -296,6 +312,30 @@ class SimViewer:
             mirror.reset_cameras()
             self._mirror = mirror
 
+    def _start_recording(self) -> None:
+        with self._scene_lock:
+            if self._recorder is not None:  # an earlier run nobody asked for: let viser drop it
+                self._recorder.serialize()
+            self._recorder = self.server.get_scene_serializer()
+            self._recorded_ms = self._frame.sim_ms
+            self._mirror.show(self._frame)  # the first frame is in the recording at its start
+
+    def _record_time(self, frame) -> None:
+        """Advance the recording's clock to `frame` (called just before it is drawn)."""
+        if self._recorder is not None and frame.sim_ms > self._recorded_ms:
+            self._recorder.insert_sleep((frame.sim_ms - self._recorded_ms) / 1000.0)
+            self._recorded_ms = frame.sim_ms
+
+    async def _end_recording(self) -> bytes:
+        # On viser's loop, like every other draw: the final frame goes in last, then the file is closed.
+        with self._scene_lock:
+            recorder, frame = self._recorder, self._frame
+            if frame is not None and self._mirror is not None:
+                self._record_time(frame)
+                self._mirror.show(frame)
+            self._recorder = None
+        return recorder.serialize()
+
     def _on_pacer_frame(self) -> None:
         # On the simulation's thread, between physics steps.
         simulation = self._simulation
@@ -357,6 +397,7 @@ class SimViewer:
         if frame is not None and frame is not drawn["frame"] and self._scene_lock.acquire(blocking=False):
             try:
                 if self._mirror is not None:
+                    self._record_time(frame)
                     self._mirror.show(frame)
             finally:
                 self._scene_lock.release()

@@ -19,8 +19,21 @@ from openbricks_server.daemon.store.export import run_json, run_text, runs_zip
 router = APIRouter(prefix="/runs", tags=["runs"], dependencies=[Depends(require_viewer)])
 
 _ULID = re.compile(r"^[0-9A-HJKMNP-TV-Z]{26}$")
-Outcome = Literal["finished", "error", "stopped", "dropped", "interrupted", "running"]
-Origin = Literal["daemon", "button", "log"]
+Outcome = Literal[
+    "finished",
+    "error",
+    "stopped",
+    "dropped",
+    "interrupted",
+    "running",
+    # how a sim run can end besides (its exit reason)
+    "time_limit",
+    "wall_limit",
+    "cpu_limit",
+    "memory_limit",
+    "reset",
+]
+Origin = Literal["daemon", "button", "log", "sim"]
 
 
 class RunSummary(BaseModel):

@@ -1,7 +1,7 @@
 """The console's database: one SQLite file (WAL) under the data dir, one module per kind of record.
 
 `Store(path)` opens (and migrates) it; its attributes are the tables' APIs: `hubs`, `programs`, `runs`,
-`events`, `tokens`, `audit`. Safe to call from the event loop and from worker threads.
+`events`, `tokens`, `audit`, `sim_runs`. Safe to call from the event loop and from worker threads.
 """
 
 from __future__ import annotations
@@ -14,6 +14,7 @@ from openbricks_server.daemon.store.events import StoredEvents
 from openbricks_server.daemon.store.hubs import Hubs
 from openbricks_server.daemon.store.programs import Programs, sha256_text
 from openbricks_server.daemon.store.runs import RunQuery, Runs
+from openbricks_server.daemon.store.sim_runs import SimRuns
 from openbricks_server.daemon.store.tokens import LabelTaken, Tokens
 
 __all__ = ["LabelTaken", "RunQuery", "Store", "StoreError", "now_ms", "sha256_text"]
@@ -28,6 +29,7 @@ class Store:
         self.events = StoredEvents(self.db)
         self.tokens = Tokens(self.db)
         self.audit = Audit(self.db)
+        self.sim_runs = SimRuns(self.db)
 
     @property
     def path(self) -> Path:

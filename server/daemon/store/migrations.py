@@ -125,4 +125,26 @@ MIGRATIONS: list[str] = [
     );
     CREATE INDEX audit_by_time ON audit (ts_ms);
     """,
+    # 2: simulator runs. A sim run is a row of `runs` (hub "sim", origin "sim": it is in the history
+    # with the hubs' runs) plus what only a sim run has: the job's inputs, its result and its recording.
+    """
+    CREATE TABLE sim_runs (
+        run_id TEXT PRIMARY KEY REFERENCES runs ON DELETE CASCADE,
+        world TEXT NOT NULL,
+        chassis TEXT,
+        seed INTEGER NOT NULL,
+        start_mm_deg TEXT,
+        speed REAL,
+        limit_ms INTEGER NOT NULL,
+        wall_limit_s REAL NOT NULL,
+        memory_mb INTEGER NOT NULL,
+        state TEXT NOT NULL,
+        exit TEXT,
+        sim_ms INTEGER,
+        pose TEXT,
+        score TEXT,
+        error TEXT,
+        recording TEXT
+    );
+    """,
 ]
