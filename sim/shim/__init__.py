@@ -11,13 +11,13 @@ puts every one of those entries back as it was and drops the copies the
 program imported, so the process that ran the program is left as it found
 it. Still, this patches process-wide state: run programs in a process of
 their own (sim.run does), never in a daemon or CLI process.
+
+The modules themselves are the one model of the hub's hardware: the runtime's tests run on them too,
+under CPython and under MicroPython (tests/openbricks/fakes put test fixtures on top). So they keep
+to MicroPython's language, and this package imports none of them until a simulated hub installs.
 """
 
 import sys
-import traceback
-import types
-
-from . import bluetooth, esp32, framebuf, machine, micropython, mptime, neopixel
 
 SHIMMED = (
     "machine",
@@ -34,6 +34,8 @@ _RUNTIME_PACKAGE = "openbricks"
 
 def native_module(serial_bus):
     """`_openbricks_native` as a simulated hub has it: the control cores plus the sim's serial_bus()."""
+    import types
+
     import openbricks_native
 
     module = types.ModuleType("_openbricks_native", openbricks_native.__doc__)
@@ -49,6 +51,8 @@ def native_module(serial_bus):
 
 def print_exception(exc, file=None):
     """MicroPython's sys.print_exception(exc, file=sys.stdout): the runtime prints tracebacks with it."""
+    import traceback
+
     traceback.print_exception(type(exc), exc, exc.__traceback__, file=sys.stdout if file is None else file)
 
 
@@ -73,6 +77,8 @@ class Shim:
     def install(self):
         if _installed[0] is not None:
             raise ShimBusyError("a simulated hub's modules are already installed in this process")
+        from . import bluetooth, esp32, framebuf, machine, micropython, mptime, neopixel
+
         sim = self._simulation
         saved_modules = {name: sys.modules.get(name) for name in SHIMMED}
         saved_runtime = {name: module for name, module in sys.modules.items() if _is_runtime(name)}
@@ -107,6 +113,8 @@ class Shim:
             return
         saved_modules, saved_runtime = self._saved
         self._saved = None
+        from . import esp32, machine, micropython, mptime
+
         for name in [name for name in sys.modules if _is_runtime(name)]:
             del sys.modules[name]
         sys.modules.update(saved_runtime)

@@ -10,6 +10,8 @@ import path from "node:path";
 
 const RUNTIME_DIR = "openbricks";
 const TESTS_DIR = "tests/openbricks";
+// The simulator's model of the hub's hardware, which the fakes build on (imported as `shim`).
+const HARDWARE_MODEL_DIR = "sim/shim";
 
 const NEEDS_NATIVE = /^NEEDS_NATIVE\s*(?::[^=]*)?=\s*True\b/m;
 const TEST_FUNCTION = /^def\s+(test_\w+)\s*\(/gm;
@@ -56,8 +58,10 @@ export function discover(repoRoot) {
   }
 
   // Everything the interpreter may need to import: the runtime, the tests and their fakes
-  // (data files included), and the package markers that make `tests.openbricks.*` importable.
-  const files = [...runtimeFiles, ...testFiles, "tests/__init__.py"].filter((rel) =>
+  // (data files included), the hardware model under them, and the package markers that make
+  // `tests.openbricks.*` importable.
+  const modelFiles = walk(repoRoot, HARDWARE_MODEL_DIR);
+  const files = [...runtimeFiles, ...testFiles, ...modelFiles, "tests/__init__.py"].filter((rel) =>
     fs.existsSync(path.join(repoRoot, rel)),
   );
   return { runtimeModules, testModules, needsNative, files };

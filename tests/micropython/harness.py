@@ -18,7 +18,11 @@ import io
 import json
 import sys
 
-import fakes
+# The simulator's hardware model (sim/shim), which the fakes build on, imports as `shim` here:
+# the simulator package around it is CPython's.
+sys.path.append("sim")
+
+import fakes  # noqa: E402 - after the path set-up
 
 fakes.install()
 

@@ -3,11 +3,14 @@
 install() puts them where the runtime imports them from (`machine`, `esp32`,
 `micropython`, the MicroPython `time` surface, and `_openbricks_native` from
 the host extension on CPython); reset() gives every test a fresh board.
+Where the simulator's model of the hardware (sim/shim, through fakes.hardware)
+serves, it is installed as it is.
 """
 
 import sys
 
-from . import bluetooth, clock, dupterm, esp32, machine, neopixel
+from . import bluetooth, clock, dupterm, machine
+from .hardware import esp32, neopixel
 
 _IS_MICROPYTHON = sys.implementation.name == "micropython"
 _BOARD_RUNTIME = (
@@ -33,7 +36,9 @@ def install():
     sys.modules["neopixel"] = neopixel
     dupterm.install()
     if not _IS_MICROPYTHON:
-        from . import deflate, framebuf, micropython
+        from openbricks_sim.shim import framebuf
+
+        from . import deflate, micropython
 
         sys.modules["micropython"] = micropython
         sys.modules["framebuf"] = framebuf  # built into MicroPython
@@ -54,7 +59,7 @@ def reset():
         from . import micropython  # MicroPython has its own scheduler
 
         micropython.reset()
-    esp32.reset()
+    esp32.bind({})  # a fresh, empty flash
     machine.board.reset()
     bluetooth.reset()
     dupterm.reset()

@@ -1,0 +1,15 @@
+"""The hub's hardware as the simulator models it (sim/shim): the one model these fixtures build on.
+
+CPython imports it from the installed simulator; the MicroPython runs put `sim/` on the path
+(tests/micropython/harness.py) and import it as `shim`, since the simulator package around it is
+CPython's.
+"""
+
+import sys
+
+if sys.implementation.name == "micropython":
+    from shim import esp32, neopixel
+else:
+    from openbricks_sim.shim import esp32, neopixel
+
+__all__ = ("esp32", "neopixel")
