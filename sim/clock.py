@@ -12,10 +12,9 @@ Between two Python timer due times the physics runs as one native
 Python timers therefore cost one call each, and a program that sleeps 10 s
 with no timers pending costs one call for the whole 10 s.
 
-Headless runs go as fast as the CPU allows (speed=None). Paced runs
-(speed=1.0 for real time, 2.0 for twice as fast) sleep on the wall clock
-before each slice of physics so simulated time never runs ahead of
-wall time x speed.
+The clock itself never waits: headless runs go as fast as the CPU allows,
+and a paced run (real time, twice as fast, paused by a viewer) has a Pacer
+(pacing.py), a timer on this clock that holds the program back.
 
 Code that only spins on the clock (`while ticks_diff(...) < 0: pass`) must
 still let time pass, as it does on a hub where every call takes CPU time:
@@ -28,8 +27,6 @@ import time
 
 # A ticks_*() call on an ESP32-S3 takes a few microseconds of interpreter time.
 CPU_US_PER_TICKS_CALL = 2
-# Paced runs hand the viewer a fresh pose at least this often.
-PACE_SLICE_MS = 10
 
 
 class SimTimeLimit(BaseException):
@@ -59,24 +56,19 @@ class _Scheduled:
 class SimClock:
     """Simulated time in microseconds, driving `physics.step(n_ms)`.
 
-    physics needs `now_ms` (steps run so far) and `step(n)`; speed is None
-    (headless) or a real-time factor; limit_ms ends the run with SimTimeLimit.
+    physics needs `now_ms` (steps run so far) and `step(n)`; limit_ms ends the
+    run with SimTimeLimit.
     """
 
-    def __init__(self, physics, speed=None, limit_ms=None, epoch_ms=None):
-        if speed is not None and not speed > 0:
-            raise ValueError(f"speed must be a positive real-time factor or None (headless), not {speed!r}")
+    def __init__(self, physics, limit_ms=None, epoch_ms=None):
         self._physics = physics
         self._now_us = physics.now_ms * 1000
         self._queue = []  # heap of (due_us, sequence, _Scheduled)
         self._sequence = 0
         self._firing = False
         self._stepping = False  # inside physics.step(): the controllers' tick is running
-        self.speed = speed
         self.limit_ms = limit_ms
         self._stop = threading.Event()
-        self._wall_start = time.perf_counter()
-        self._sim_start_us = self._now_us
         epoch_ms = time.time_ns() // 1_000_000 if epoch_ms is None else epoch_ms
         self._epoch_base_us = int(epoch_ms) * 1000 - self._now_us
 
@@ -174,25 +166,8 @@ class SimClock:
     def _step(self, n_ms: int) -> None:
         if n_ms <= 0:
             return
-        if self.speed is None:
-            self._physics_step(n_ms)
-            return
-        while n_ms > 0:
-            chunk = min(n_ms, PACE_SLICE_MS)
-            self._pace(self._physics.now_ms + chunk)
-            self._physics_step(chunk)
-            n_ms -= chunk
-
-    def _physics_step(self, n_ms: int) -> None:
         self._stepping = True
         try:
             self._physics.step(n_ms)
         finally:
             self._stepping = False
-
-    def _pace(self, sim_ms: int) -> None:
-        """Wait until the wall clock has caught up with sim_ms at the configured speed."""
-        due = self._wall_start + (sim_ms * 1000 - self._sim_start_us) / 1e6 / self.speed
-        wait = due - time.perf_counter()
-        if wait > 0:
-            self._stop.wait(wait)  # a real sleep that a stop request cuts short

@@ -13,6 +13,7 @@ serial-bus servo's own speed loop) runs on the simulation's world_process.
 import openbricks_native
 
 from .clock import SimClock
+from .pacing import Pacer
 from .physics import Physics
 from .robot import wire
 from .sensors.rig import I2C_BUS, attach_sensors, wire_bare_colour_sensor
@@ -35,14 +36,18 @@ class Simulation:
         range_finder="vl53l0x",
         bare_0x29=None,
     ):
-        """`range_finder` and `bare_0x29` choose the sensor rig's parts (see sensors/rig.py)."""
+        """speed: a real-time factor to pace at (None: as fast as the CPU allows, no pacer at all).
+        `range_finder` and `bare_0x29` choose the sensor rig's parts (see sensors/rig.py)."""
         self.physics = Physics(world, chassis, seed, start_mm_deg, wheel_diameter_mm, axle_track_mm)
         try:
             # A fresh hub: no controllers left over from an earlier run in this process.
             openbricks_native.motor_process.reset()
             self.world_process = openbricks_native.MotorProcess()
             self.controller = self.physics.attach_control(self.world_process)
-            self.clock = SimClock(self.physics, speed=speed, limit_ms=limit_ms, epoch_ms=epoch_ms)
+            self.clock = SimClock(self.physics, limit_ms=limit_ms, epoch_ms=epoch_ms)
+            self.pacer = None
+            if speed is not None:
+                self.pace(speed)
             self.board = SimBoard(self.clock)
             self.nvs = nvs if nvs is not None else {}
             self.wiring = wire(self.physics, self.board, self.world_process)
@@ -52,6 +57,16 @@ class Simulation:
         except BaseException:
             self.physics.close()
             raise
+
+    def pace(self, speed=1.0, **options):
+        """Pace this simulation from now on with a new Pacer (pacing.py; options: on_frame,
+        frame_hz, wakeup), replacing the one it had: one pacer per clock, or they would wait
+        on each other."""
+        if self.pacer is not None:
+            self.pacer.stop()
+        self.pacer = Pacer(self.clock, speed=speed, **options)
+        self.pacer.start()
+        return self.pacer
 
     @classmethod
     def for_job(cls, job, paced=True):
@@ -82,6 +97,8 @@ class Simulation:
 
     def close(self):
         """Stop every controller and release the physics callback (idempotent)."""
+        if self.pacer is not None:
+            self.pacer.stop()
         openbricks_native.motor_process.reset()
         self.world_process.reset()
         self.physics.close()

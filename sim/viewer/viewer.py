@@ -37,9 +37,9 @@ from collections import deque
 import viser
 
 from ..chassis import ROBOT_BODY
+from ..pacing import DEFAULT_FRAME_HZ
 from .frames import capture
 from .output import OutputTail
-from .pacing import DEFAULT_FRAME_HZ, Pacer
 from .panel import ControlPanel
 from .scene import SceneMirror, model_fingerprint
 
@@ -155,16 +155,14 @@ class SimViewer:
         """Show `simulation` and pace it; call from the thread that will run its program.
 
         stop() is how the page's Stop and Restart buttons end the run (a ProgramRun's
-        request_stop). A clock built with a speed hands that speed to the viewer, which paces from
-        now on.
+        request_stop). A simulation built with a speed hands that speed to the viewer, which paces
+        from now on.
         """
         with self._lock:
             if self._simulation is not None:
                 raise RuntimeError("the viewer already shows a simulation: detach() it first")
-            clock = simulation.clock
-            if clock.speed is not None:
-                self._speed = clock.speed
-                clock.speed = None
+            if simulation.pacer is not None:  # a simulation built with a speed hands it over
+                self._speed = simulation.pacer.speed
                 self.panel.set_speed(self._speed)
             self._ensure_scene(simulation.physics.model)
             self._simulation = simulation
@@ -179,8 +177,7 @@ class SimViewer:
             if self._record:
                 self._start_recording()
             self._state = RUNNING
-            self._pacer = Pacer(clock, self._on_pacer_frame, speed=self._speed, frame_hz=self._frame_hz)
-            self._pacer.start()
+            self._pacer = simulation.pace(self._speed, on_frame=self._on_pacer_frame, frame_hz=self._frame_hz)
 
     def show_still(self, simulation, state: str) -> None:
         """Show `simulation` as it is now, with no run attached (a preview of a world)."""

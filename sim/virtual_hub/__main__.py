@@ -19,6 +19,7 @@ import signal
 import sys
 import threading
 
+from ..job import CHASSIS_NAMES, add_seed_argument
 from ..limits import DEFAULT_MEMORY_MB, contain
 from . import endpoint
 from .control import SOCKET_NAME, ControlServer
@@ -70,8 +71,8 @@ def parse_args(argv=None):
     parser.add_argument("--pty", action="store_true", help="serve on a new pseudo-terminal (else stdio)")
     parser.add_argument("--dir", help="the hub's directory (default: <data dir>/virtual-hubs/NAME)")
     parser.add_argument("--world", default="empty", help="world alias or MJCF file (default: empty)")
-    parser.add_argument("--chassis", default="st3032", help="st3032 or jgb37 (default: st3032)")
-    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--chassis", default="st3032", choices=CHASSIS_NAMES, help="default: st3032")
+    add_seed_argument(parser)
     parser.add_argument(
         "--speed",
         type=_speed,

@@ -31,7 +31,7 @@ from .hub_fs import DEFAULT_CAPACITY_BYTES, HubFS
 from .hub_python import HubPython
 from .nvs_store import PersistentNVS
 from .repl import DEFAULT_PASTE_WINDOW, FRIENDLY, SOFT_REBOOT, Execute, Interrupt, ReplProtocol, SoftReboot
-from .world import HubWorld, Pacer, RunLimits
+from .world import HubWorld, RunLimits, checked_time
 
 MACHINE = "openbricks virtual hub (simulated) with ESP32S3"
 EPOCH_2000_MS = 946684800000  # the RTC of a hub nobody has set yet reads 2000-01-01
@@ -99,10 +99,13 @@ class VirtualHub:
         self.limits = RunLimits(
             self.world.clock, self.gate.interrupt, config.run_sim_limit_ms, config.run_wall_limit_s
         )
-        self.pacer = Pacer(self.world.clock, self._speed_now, self.gate.wakeup, self._between_slices)
+        # Real time at the prompt and in the launcher's idle loop (an idle hub must not spin the
+        # physics flat out), the hub's speed while a program runs (_on_run).
+        self.pacer = self.world.simulation.pace(1.0, wakeup=self.gate.wakeup)
+        self.gate.add_waiter(self.pacer.nudge)
         self.python = HubPython(
             self.fs,
-            self.pacer.time_module(),
+            checked_time(self._between_slices),
             MACHINE,
             input_fn=make_input(self.stdin, self.stdout),
             stdin_ready=self.stdin.wait_readable,
@@ -308,7 +311,7 @@ class VirtualHub:
         _stop_native_controllers()
         self.python.forget_modules()
         self.python.reset()
-        self.run_active = False
+        self._set_run_active(False)
         self.limits.stop()
         launcher = importlib.import_module("openbricks.launcher")
         launcher.add_listener(self._on_run)
@@ -326,10 +329,11 @@ class VirtualHub:
             self.limits.start()
         else:
             self.limits.stop()
-        self.run_active = running
+        self._set_run_active(running)
 
-    def _speed_now(self):
-        return self.config.speed if self.run_active else 1.0
+    def _set_run_active(self, running):
+        self.run_active = running
+        self.pacer.speed = self.config.speed if running else 1.0
 
     def _between_slices(self):
         if self._closing.is_set():

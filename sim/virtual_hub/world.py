@@ -5,15 +5,12 @@
   the robot put back on its start pose at every program run (props too; the wheels keep their
   angles, as a robot picked up and set down keeps its encoder counts), and the timers the hub's
   Python set, which a soft reset cancels as MicroPython's does.
-- `Pacer` makes hub sleeps take wall time: a hub at its prompt or in the launcher's idle loop runs
-  at real time (an idle hub must not spin the physics flat out), a program run at the hub's speed
-  (real time by default, or as fast as the CPU allows). Time the hub spent waiting for the host is
-  not made up later: the pacing restarts from the present instead of racing to catch up.
+- How hub time takes wall time is the simulation's Pacer (pacing.py), set up by the hub;
+  `checked_time` is the hub code's `time`, whose sleeps check the run limits as they go.
 - `RunLimits` bounds each program run in simulated and in wall-clock time.
 """
 
 import threading
-import time
 import types
 
 import mujoco
@@ -22,10 +19,9 @@ from ..shim import Shim, mptime
 from ..shim import micropython as shim_micropython
 from ..simulation import Simulation
 
+CHECK_SLICE_US = 20_000  # a long sleep checks the run limits (and a shutdown) this often
 PROGRAM_BUTTON_PIN = 39
 CLICK_HOLD_MS = 200  # the launcher debounces over two 50 ms polls; a click holds well past that
-PACE_SLICE_US = 20_000  # sleeps advance the physics in slices this long, paced between slices
-MAX_LAG_S = 0.1  # behind the wall clock by more than this: re-anchor rather than race to catch up
 
 
 class RunLimitExceeded(BaseException):
@@ -156,56 +152,28 @@ class HubWorld:
         return {"x_mm": pose.x_mm, "y_mm": pose.y_mm, "heading_deg": pose.heading_deg}
 
 
-class Pacer:
-    """Paces hub sleeps against the wall clock; `speed()` says the real-time factor right now
-    (None: as fast as possible). `wakeup` is set while an interrupt is on its way."""
+def checked_time(check):
+    """MicroPython's `time` for hub code: the simulator's, with sleeps that call check() every
+    CHECK_SLICE_US of simulated time, so a run limit or a shutdown ends a sleeping program where a
+    hub program expects to be stopped (in a sleep), not inside the runtime's own bookkeeping."""
 
-    def __init__(self, clock, speed, wakeup, check=None):
-        self._clock = clock
-        self._speed = speed
-        self._wakeup = wakeup
-        self._check = check  # called after every slice (run limits); may raise
-        self._anchor = None  # (wall_s, sim_us, speed) the pacing counts from
-
-    def sleep_us(self, us):
+    def sleep_us(us):
         remaining = int(us)
         while remaining > 0:
-            chunk = min(remaining, PACE_SLICE_US)
+            chunk = min(remaining, CHECK_SLICE_US)
             mptime.sleep_us(chunk)
             remaining -= chunk
-            if self._check is not None:
-                self._check()
-            self._pace()
+            check()
 
-    def _pace(self):
-        speed = self._speed()
-        wall = time.perf_counter()
-        sim_us = self._clock.now_us()
-        anchor = self._anchor
-        if speed is None:
-            self._anchor = None
-            return
-        if anchor is None or anchor[2] != speed:
-            self._anchor = (wall, sim_us, speed)
-            return
-        due = anchor[0] + (sim_us - anchor[1]) / 1e6 / speed
-        wait = due - wall
-        if wait > 0:
-            self._wakeup.wait(wait)
-        elif -wait > MAX_LAG_S:
-            self._anchor = (wall, sim_us, speed)
-
-    def time_module(self):
-        """MicroPython's `time` for hub code: the simulator's, with these paced sleeps."""
-        module = types.ModuleType("time", mptime.__doc__)
-        for name in dir(mptime):
-            if not name.startswith("_") and name not in ("bind",) and callable(getattr(mptime, name)):
-                setattr(module, name, getattr(mptime, name))
-        module.sleep_us = self.sleep_us
-        module.sleep_ms = lambda ms: self.sleep_us(int(ms * 1000)) if ms > 0 else None
-        module.sleep = lambda seconds: self.sleep_us(int(seconds * 1_000_000)) if seconds > 0 else None
-        module.__getattr__ = mptime.__getattr__
-        return module
+    module = types.ModuleType("time", mptime.__doc__)
+    for name in dir(mptime):
+        if not name.startswith("_") and name != "bind" and callable(getattr(mptime, name)):
+            setattr(module, name, getattr(mptime, name))
+    module.sleep_us = sleep_us
+    module.sleep_ms = lambda ms: sleep_us(int(ms * 1000)) if ms > 0 else None
+    module.sleep = lambda seconds: sleep_us(int(seconds * 1_000_000)) if seconds > 0 else None
+    module.__getattr__ = mptime.__getattr__
+    return module
 
 
 class RunLimits:

@@ -1,16 +1,23 @@
-"""Paces a simulation for someone watching it: play, pause, and a speed that can change mid-run.
+"""The one pacer: simulated time held to the wall clock at a speed, with pause, and a chance per frame
+for someone watching to look at the world.
 
-A program run advances simulated time itself (its sleeps and bus transfers move the SimClock), so the
-viewer cannot step the physics; it rides along instead. The Pacer is a timer on the simulation's own
-clock: every time it fires, the physics has just reached that instant, so it hands a fresh Frame to
-the viewer and then holds the program's thread until the wall clock has caught up with simulated
-time at the chosen speed (or for as long as the run is paused). The physics between two firings
-still runs as one native call, so watching costs a few microseconds per frame, not per step.
+A program run advances simulated time itself (its sleeps, bus transfers and Python calls move the
+SimClock), so nothing outside can step the physics; pacing rides along instead. The Pacer is a timer
+on the simulation's own clock: every time it fires, the physics has just reached that instant, so it
+hands `on_frame` (the 3D viewer) a look and then holds the program's thread until the wall clock has
+caught up with simulated time at the chosen speed (or for as long as the run is paused). The
+physics between two firings still runs as one native call, so pacing costs a few microseconds per
+frame, not per step.
+
+It paces `sim run --speed`, the viewer (whose page changes speed and pauses mid-run) and a virtual
+hub (real time at its prompt, its own speed while a program runs). Unpaced headless runs have no
+pacer at all: nothing then depends on the wall clock, and a job gives the same result every time.
 
 Paced, the timer fires about `frame_hz` times per wall-clock second: at 0.25x every 4 ms of
 simulated time, at 8x every 133 ms. As fast as possible, it fires every few tens of simulated ms
 (so a pause or a new speed lands promptly) and hands over a frame only when a frame period of wall
-time has passed. The simulation's own clock must not pace as well (its speed must be None).
+time has passed. Time the program spent not advancing the clock (a hub waiting at its prompt) is not
+made up later: behind by more than MAX_LAG_S, pacing starts over from the present.
 """
 
 from __future__ import annotations
@@ -32,22 +39,27 @@ _FRAME_SLACK = 0.8
 
 
 class Pacer:
-    """Hands `on_frame()` a chance to look at the world ~frame_hz times a second, and holds time back.
+    """Holds simulated time to the wall clock; hands `on_frame()` a look ~frame_hz times a second.
 
     speed is a real-time factor (1.0 = real time) or None (as fast as possible). `speed` and
     `paused` may be changed from any thread; a change takes effect at once, even mid-wait.
+    While `wakeup` (an Event) is set nothing is held back: an interrupt is on its way to the
+    program; call nudge() when it is set to cut a wait short.
     """
 
-    def __init__(self, clock, on_frame, speed: float | None = 1.0, frame_hz: float = DEFAULT_FRAME_HZ):
+    def __init__(
+        self,
+        clock,
+        on_frame=None,
+        speed: float | None = 1.0,
+        frame_hz: float = DEFAULT_FRAME_HZ,
+        wakeup: threading.Event | None = None,
+    ):
         if frame_hz <= 0:
             raise ValueError(f"frame_hz must be positive, not {frame_hz!r}")
-        if getattr(clock, "speed", None) is not None:
-            raise ValueError(
-                "the simulation's clock paces itself (speed set when it was built): build it with "
-                "speed=None and give the speed to the viewer, or the two would wait on each other"
-            )
         self._clock = clock
         self._on_frame = on_frame
+        self._wakeup = wakeup
         self._frame_hz = float(frame_hz)
         self._speed = _checked_speed(speed)
         self._paused = False
@@ -90,6 +102,11 @@ class Pacer:
         self._last_tick = self._rate_from = self._last_frame_s = None
         self._schedule()
 
+    def nudge(self) -> None:
+        """Wake a held program at once (any thread); pacing goes on from the present."""
+        self._anchor = None
+        self._changed.set()
+
     def stop(self) -> None:
         """Stop holding time back (any thread): a paused or waiting run goes on at once."""
         self._running = False
@@ -108,7 +125,9 @@ class Pacer:
             return
         now = time.perf_counter()
         previous, self._last_tick = self._last_tick, (now, self._clock.now_us())
-        if self._last_frame_s is None or now - self._last_frame_s >= _FRAME_SLACK / self._frame_hz:
+        if self._on_frame is not None and (
+            self._last_frame_s is None or now - self._last_frame_s >= _FRAME_SLACK / self._frame_hz
+        ):
             self._last_frame_s = now
             self._on_frame()
         self._hold()
@@ -120,6 +139,9 @@ class Pacer:
         """Wait while paused, or until the wall clock catches up with simulated time."""
         while self._running:
             self._changed.clear()  # cleared before the state is read: a change after this still wakes us
+            if self._wakeup is not None and self._wakeup.is_set():
+                self._anchor = None
+                return
             if self._paused:
                 self._changed.wait()
                 continue

@@ -1,5 +1,6 @@
-"""Pacing a simulation for a watcher: simulated time follows the wall clock at the chosen speed, stands
-still while paused, and a change of speed or a stop takes effect at once, even mid-wait.
+"""The one pacer (sim run --speed, the viewer, a virtual hub): simulated time follows the wall clock at
+the chosen speed, stands still while paused, and a change of speed, a stop or an interrupt takes effect
+at once, even mid-wait.
 
 The simulated robot stands idle; what is measured is how long advancing its clock takes in wall time,
 which is what a person watching the run experiences."""
@@ -9,8 +10,8 @@ import time
 
 import pytest
 
+from openbricks_sim.pacing import Pacer
 from openbricks_sim.simulation import Simulation
-from openbricks_sim.viewer.pacing import Pacer
 
 
 @pytest.fixture
@@ -119,13 +120,42 @@ def test_stop_releases_a_paused_run(sim):
     assert not thread.is_alive() and sim.clock.now_ms() == 500
 
 
-def test_a_clock_that_already_paces_itself_is_refused():
-    simulation = Simulation("empty", "st3032", speed=1.0)
+def test_a_simulation_built_with_a_speed_paces_itself_and_one_pacer_replaces_another():
+    simulation = Simulation("empty", "st3032", speed=4.0)
     try:
-        with pytest.raises(ValueError, match="speed=None"):
-            Pacer(simulation.clock, FrameCounter())
+        assert wall_time_to_advance(simulation.clock, 1000) == pytest.approx(0.25, rel=0.15, abs=0.03)
+        first = simulation.pacer
+        simulation.pace(None)  # the viewer takes over: the first pacer must not hold time any more
+        assert simulation.pacer is not first
+        assert wall_time_to_advance(simulation.clock, 5000) < 1.0
     finally:
         simulation.close()
+
+
+def test_an_unpaced_simulation_has_no_pacer(sim):
+    assert sim.pacer is None  # nothing then depends on the wall clock: a job repeats exactly
+
+
+def test_time_spent_not_advancing_the_clock_is_not_raced_through_afterwards(sim):
+    pacer = Pacer(sim.clock, speed=1.0)
+    pacer.start()
+    sim.clock.advance_us(40_000)
+    time.sleep(0.5)  # a virtual hub sat at its prompt: no simulated time passed
+    assert wall_time_to_advance(sim.clock, 200) > 0.15
+
+
+def test_an_interrupt_on_its_way_cuts_a_paced_wait_short(sim):
+    wakeup = threading.Event()
+    pacer = Pacer(sim.clock, speed=0.01, wakeup=wakeup)  # 100 times slower than real time
+    pacer.start()
+    sim.clock.advance_us(1000)
+    thread = advance_in_background(sim.clock, 20)  # 2 s of wall time unless woken
+    time.sleep(0.1)
+    started = time.perf_counter()
+    wakeup.set()
+    pacer.nudge()
+    thread.join(timeout=5.0)
+    assert not thread.is_alive() and time.perf_counter() - started < 0.5
 
 
 def test_a_speed_that_is_not_a_positive_number_is_refused(sim):
