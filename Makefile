@@ -19,7 +19,7 @@ MICROPY_BUILD := $(REPO_ROOT)/build/micropython
 UNIX_MICROPYTHON := $(MICROPY_BUILD)/micropython
 NATIVE_SOURCES := $(wildcard firmware/native/*.[ch] firmware/native/user_c_modules/openbricks/*)
 
-.PHONY: setup system-packages test test-fast lint console bench micropython web web-check
+.PHONY: setup system-packages test test-fast lint console bench micropython web web-check docs
 
 setup: $(VENV)/.installed $(MPY_NODE)
 
@@ -34,7 +34,7 @@ system-packages:
 $(VENV)/.installed: pyproject.toml setup.py | system-packages
 	$(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install -q --upgrade pip
-	$(PY) -m pip install -q -e '.[dev,sim]'
+	$(PY) -m pip install -q -e '.[dev,sim,docs]'
 	touch $@
 
 $(MPY_NODE): tests/micropython/package.json tests/micropython/package-lock.json
@@ -70,6 +70,22 @@ build/web-check.stamp: $(WEB_NODE) $(WEB_SOURCES) $(WEB_TESTS)
 
 web: $(WEB_STATIC)/index.html
 
+# The documentation site (docs/, Sphinx): built into the Python package (server/docs_html), which
+# `openbricks docs` opens and the daemon serves at /manual/. Warnings are errors. The API pages import
+# the runtime inside the simulator's shim, so the extensions are built first. Screenshots are the
+# browser tests' latest (build/artifacts) when a test run left them, else the copies in docs/screenshots;
+# `make docs` after `make test` picks up the fresh ones.
+DOCS_HTML := server/docs_html
+DOCS_SOURCES := $(shell find docs examples openbricks -type f -not -path 'docs/_screenshots/*' -not -name '*.pyc' 2>/dev/null) \
+	server/cli.py $(wildcard build/artifacts/*/*.png)
+
+$(DOCS_HTML)/index.html: $(DOCS_SOURCES) | $(VENV)/.installed
+	$(PY) setup.py -q build_ext --inplace
+	$(PY) -m sphinx -W --keep-going -q -b html -d build/docs-doctrees docs $(DOCS_HTML)
+	touch $@
+
+docs: $(DOCS_HTML)/index.html
+
 web-check: build/web-check.stamp
 
 lint: setup
@@ -78,11 +94,11 @@ lint: setup
 
 # Rebuild the C extension in place (after editing firmware/native), then run everything.
 # One pytest run: fast unit tests first, the e2e-marked ones last (tests/conftest.py orders them).
-test: setup lint micropython web-check web
+test: setup lint micropython web-check web docs
 	$(PY) setup.py -q build_ext --inplace
 	$(PY) -m pytest
 
-test-fast: setup micropython web
+test-fast: setup micropython web docs
 	$(PY) setup.py -q build_ext --inplace
 	$(PY) -m pytest -m "not e2e" -q
 

@@ -25,8 +25,6 @@ setup(
     packages=packages(),
     package_dir=PACKAGE_FOLDERS,
     exclude_package_data={"openbricks_sim": ["native/*", "native/*/*"]},
-    # The user documentation, for `openbricks docs` offline (server/docs_site.py looks here).
-    data_files=[("share/openbricks/docs", sorted(glob("docs/*.md")))],
     ext_modules=[
         Extension(
             "openbricks_native",

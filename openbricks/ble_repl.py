@@ -101,6 +101,7 @@ def dump_log():
 
 
 def clear_log():
+    """Forget the recorded BLE events (dump_log() then prints nothing)."""
     del _log[:]
     _log_next[0] = 0
 
@@ -417,6 +418,7 @@ def stop():
 
 
 def is_running():
+    """True while the NUS bridge is up (between start() and stop())."""
     return _bridge is not None
 
 

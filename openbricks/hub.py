@@ -52,9 +52,12 @@ class Button:
 class Hub:
     """Board-level peripherals baked into a devkit."""
 
+    #: The status LED (a StatusLED), or None on a hub built without one.
     led = None
+    #: The Bluetooth on/off button (a Button), or None.
     bluetooth_button = None
-    bluetooth_toggle = None  # the BLE button watcher, when bluetooth=True
+    #: The BluetoothToggleButton watching that button, when the hub was built with bluetooth=True.
+    bluetooth_toggle = None
     _pins = ()
 
     def close(self):

@@ -292,15 +292,20 @@ class Launcher:
     class attributes, so a hub with a bouncier button can subclass and change them.
     """
 
-    DEBOUNCE_TICKS = 2  # a level must hold this many polls in a row to count as a press or release
-    START_LOCKOUT_MS = 500  # after a stop, presses are ignored this long (the stopping press bounces)
-    RUN_START_GRACE_MS = 400  # a press this soon after a start is the starting press's chatter
-    STOP_RETRY_MS = 300  # the interrupt is re-requested this often until the program is dead
-    STARVE_NOTE_MS = 5000  # a gap this long between ticks is worth a line in the run log
-    # After the release that starts a program, further releases this soon are that press's chatter:
-    # they never queue a second start (a program that ends at once must not be started again).
+    #: A level must hold this many polls in a row to count as a press or a release.
+    DEBOUNCE_TICKS = 2
+    #: After a stop, presses are ignored this long, in ms (the stopping press bounces).
+    START_LOCKOUT_MS = 500
+    #: A press this soon after a start, in ms, is the starting press's chatter.
+    RUN_START_GRACE_MS = 400
+    #: The interrupt is requested again this often, in ms, until the program is dead.
+    STOP_RETRY_MS = 300
+    #: A gap this long between ticks, in ms, is worth a line in the run log.
+    STARVE_NOTE_MS = 5000
+    #: After the release that starts a program, further releases this soon (ms) are that press's
+    #: chatter: they never queue a second start (a program that ends at once is not started again).
     START_PRESS_OPEN_MS = 600
-    # ... and a press this soon after that release is its chatter too, not a stop of the new run.
+    #: A press this soon after that release, in ms, is its chatter too, not a stop of the new run.
     RELEASE_CHATTER_MS = 500
 
     def __init__(

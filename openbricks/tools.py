@@ -52,11 +52,13 @@ class StopWatch:
         self._started_ms = time.ticks_ms()
 
     def pause(self):
+        """Stop counting; time() keeps returning the elapsed ms until resume()."""
         if not self._paused:
             self._elapsed_ms += time.ticks_diff(time.ticks_ms(), self._started_ms)
             self._paused = True
 
     def resume(self):
+        """Count on from where pause() stopped."""
         if self._paused:
             self._started_ms = time.ticks_ms()
             self._paused = False

@@ -362,7 +362,10 @@ def _add_docs(sub):
         description="Open the documentation shipped with openbricks in your browser; no internet needed.",
     )
     p.add_argument(
-        "topic", nargs="?", help="Page to open, e.g. install, cli, hardware, simulator. Omit for the index."
+        "topic",
+        nargs="?",
+        help="Page to open, e.g. install, first-robot, simulator, console, drivebase, motors. "
+        "Omit for the index.",
     )
     return p
 

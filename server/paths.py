@@ -77,8 +77,3 @@ def virtual_hubs_dir() -> Path:
 def firmware_cache_dir() -> Path:
     """Downloaded firmware releases, by version."""
     return ensure(cache_dir() / "firmware")
-
-
-def docs_cache_dir() -> Path:
-    """The offline docs rendered to HTML."""
-    return ensure(cache_dir() / "docs")

@@ -52,11 +52,10 @@ def test_the_wheel_carries_everything_an_installed_openbricks_reads(tmp_path):
     )
     (wheel,) = tmp_path.glob("openbricks-*.whl")
     names = set(zipfile.ZipFile(wheel).namelist())
-    docs = {
-        f"openbricks-{openbricks.__version__}.data/data/share/openbricks/docs/{p.name}"
-        for p in (root / "docs").glob("*.md")
-    }
-    assert docs and docs <= names, "the offline manual of `openbricks docs`"
+    site = "openbricks_server/docs_html/"
+    for page in ("index.html", "api/drivebase.html", "cli-reference.html", "searchindex.js"):
+        assert site + page in names, f"the documentation site of `openbricks docs` (`make docs`): {page}"
+    assert any(n.startswith(site + "_static/") and n.endswith(".css") for n in names), "the site's theme"
     assert "openbricks_server/keys/firmware_signing.pub" in names, "flash's provenance check"
     assert "openbricks_server/flash/qtr_starter.json" in names, "flash --with-qtr-init"
     console = "openbricks_server/daemon/static/"

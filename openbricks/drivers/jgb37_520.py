@@ -194,6 +194,7 @@ class JGB37Motor(Motor):
         return self._io.read_angle() + self._offset_deg
 
     def reset_angle(self, angle=0):
+        """Make the shaft's current position read as `angle` degrees (0 by default)."""
         self._offset_deg = angle - self._io.read_angle()
         if self._servo is not None:
             self._servo.reset_angle(angle)

@@ -87,6 +87,7 @@ class QTRReading:
         return max(self.values())
 
     def dark_count(self):
+        """How many elements of this snapshot are over the line (see QTRArray.dark_count())."""
         return self._array.dark_count(self)
 
     def all_dark(self):
@@ -94,21 +95,27 @@ class QTRReading:
         return self._array.dark_count(self) == len(self.elements)
 
     def position(self):
+        """Line centre in mm of this snapshot, positive = right of centre; None when no line is seen."""
         return self._array.position(self)
 
     def left_edge_position(self):
+        """The line's LEFT edge in mm in this snapshot; None when nothing is dark."""
         return self._array.left_edge_position(self)
 
     def right_edge_position(self):
+        """The line's RIGHT edge in mm in this snapshot; None when nothing is dark."""
         return self._array.right_edge_position(self)
 
     def edge_error(self):
+        """Steering error -50 .. +50 of this snapshot for the set_mode() discipline (+ = steer right)."""
         return self._array.edge_error(self)
 
     def leftmost_position(self):
+        """Centre (mm) of the leftmost dark cluster of this snapshot (the left fork), or None."""
         return self._array.leftmost_position(self)
 
     def rightmost_position(self):
+        """Centre (mm) of the rightmost dark cluster of this snapshot (the right fork), or None."""
         return self._array.rightmost_position(self)
 
     def __repr__(self):
@@ -125,11 +132,13 @@ class QTRArray:
     an element counts as over the line.
     """
 
-    # Edge-follower setpoints for set_mode(): where the followed edge should sit, in mm.
+    #: Where set_mode("left") holds the line's LEFT edge, in mm from the array's centre.
     LEFT_SETPOINT_MM = 0.0
+    #: Where set_mode("right") holds the line's RIGHT edge, in mm from the array's centre.
     RIGHT_SETPOINT_MM = 0.0
-    # The manual's spelling of the same two attributes.
+    #: The manual's spelling of LEFT_SETPOINT_MM (the same value).
     LEFT_SETPPOINT_MM = 0.0
+    #: The manual's spelling of RIGHT_SETPOINT_MM (the same value).
     RIGHT_SETPPOINT_MM = 0.0
 
     def __init__(self, pins, pitch_mm=4.0, ctrl=None, dark_threshold=300, positions_mm=None):
@@ -463,12 +472,19 @@ class QTRLineSensor(QTRArray):
     only swaps channel labels. Other wiring: use QTRArray with your own pins and positions.
     """
 
+    #: The QTRX-HD-15A channels wired, left to right.
     CHANNELS = (1, 3, 4, 5, 7, 9, 11, 12, 13, 15)
+    #: The ADC GPIOs they are wired to, left to right.
     PINS = (1, 2, 3, 4, 5, 6, 7, 8, 9, 10)
+    #: Each element's position in mm from the window's centre, left to right.
     POSITIONS_MM = (-28.0, -20.0, -16.0, -12.0, -4.0, 4.0, 12.0, 16.0, 20.0, 28.0)
+    #: set_mode("left") holds the LEFT edge under channel 4: -16 mm.
     LEFT_SETPOINT_MM = POSITIONS_MM[CHANNELS.index(4)]
+    #: set_mode("right") holds the RIGHT edge under channel 12: +16 mm.
     RIGHT_SETPOINT_MM = POSITIONS_MM[CHANNELS.index(12)]
+    #: The manual's spelling of LEFT_SETPOINT_MM.
     LEFT_SETPPOINT_MM = LEFT_SETPOINT_MM
+    #: The manual's spelling of RIGHT_SETPOINT_MM.
     RIGHT_SETPPOINT_MM = RIGHT_SETPOINT_MM
 
     def __init__(self, dark_threshold=300):

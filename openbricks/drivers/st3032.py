@@ -16,12 +16,14 @@ _STALL_TORQUE_MNM = 980.0
 class ST3032(ST3215):
     """One ST-3032 in position mode; see ST3215."""
 
+    #: Datasheet stall torque of the ST-3032 in mNm (10 kg.cm).
     STALL_TORQUE_MNM = _STALL_TORQUE_MNM
 
 
 class ST3032Motor(ST3215Motor):
     """One ST-3032 as a wheel; see ST3215Motor. max_dps defaults to the datasheet no-load speed."""
 
+    #: Datasheet stall torque of the ST-3032 in mNm (10 kg.cm): the scale of load().
     STALL_TORQUE_MNM = _STALL_TORQUE_MNM
 
     def __init__(

@@ -458,8 +458,11 @@ class ST3215Motor(_BusServo, Motor):
     losing turns (the window leaves +-4 turns of slack for the estimate).
     """
 
+    #: Datasheet stall torque in mNm: the scale of load().
     STALL_TORQUE_MNM = 2940.0
+    #: stalled() needs the load at or above this percent of the stall torque...
     STALL_LOAD_PCT = 80
+    #: ...while the shaft turns at most this fast, in deg/s.
     STALL_SPEED_DPS = 20.0
 
     def __init__(

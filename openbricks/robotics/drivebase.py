@@ -178,7 +178,7 @@ class DriveBase:
         self._move("turn", lambda c, name: c.turn(angle_deg, then=name), then, wait)
 
     def curve(self, radius, angle, then="coast", wait=True):
-        """Drive along a circle of |radius| mm, turning the heading by `angle` degrees.
+        """Drive along a circle of abs(`radius`) mm, turning the heading by `angle` degrees.
 
         Positive angle curves right; a negative radius drives the arc backward; radius 0 turns in
         place. The outer wheel never exceeds the straight_speed setting.

@@ -164,6 +164,7 @@ def create_app(config: DaemonConfig, services: Sequence[Service] | None = None) 
     app.include_router(sim_view.router)
     if pages.ASSETS_DIR.is_dir():
         app.mount("/assets", StaticFiles(directory=pages.ASSETS_DIR), name="assets")
+    pages.mount_manual(app)
     for router in ROUTERS:
         app.include_router(router, prefix="/api")
     check_mutating_routes(app)

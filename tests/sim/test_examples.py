@@ -177,3 +177,38 @@ def test_bno055_gyro_square_finishes_and_closes(tmp_path):
 def test_oled_example_draws_while_it_drives(tmp_path):
     result = run_example(EXAMPLES / "oled_status.py", tmp_path)
     assert "done: 800 mm, 360 deg" in result["output"] or "done: 801 mm, 360 deg" in result["output"]
+
+
+def test_first_robot_goes_out_and_comes_home_facing_back(tmp_path):
+    result = run_example(EXAMPLES / "first_robot.py", tmp_path)
+    pose = result["pose"]
+    assert math.hypot(pose["x_mm"], pose["y_mm"]) < 15.0
+    assert heading_error_deg(pose["heading_deg"], 180.0) < 3.0
+    assert "home again after 1000 mm" in result["output"]
+
+
+def test_a_colour_sensor_on_the_bare_bus_sees_the_line_it_crosses(tmp_path):
+    # No mux in the program: the simulator wires its colour sensor straight to I2C0.
+    result = run_example(EXAMPLES / "colour_bare_bus.py", tmp_path, world="zones")
+    onto = int(re.search(r"onto the line at (\d+) mm", result["output"]).group(1))
+    off = int(re.search(r"off the line at (\d+) mm", result["output"]).group(1))
+    # The skewed line is 20 mm wide, about 260 mm ahead of the sensor at the start.
+    assert 200 < onto < off < onto + 60
+    assert int(re.search(r"start: reflection (\d+)", result["output"]).group(1)) > 60
+
+
+def test_the_seed_sweep_script_tabulates_one_row_per_seed(tmp_path):
+    env = dict(os.environ, PATH=os.pathsep.join([os.path.dirname(sys.executable), os.environ["PATH"]]))
+    done = subprocess.run(
+        [sys.executable, str(EXAMPLES / "host" / "seed_sweep.py"), str(EXAMPLES / "first_robot.py")]
+        + ["--world", "zones", "--seeds", "3-4"],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        env=env,
+        cwd=tmp_path,
+    )
+    assert done.returncode == 0, done.stderr
+    rows = re.findall(r"^\s+(\d+)  (\w+)\s", done.stdout, flags=re.M)
+    assert rows == [("3", "finished"), ("4", "finished")]
+    assert "finished: 2 of 2 (100 %)" in done.stdout

@@ -1,20 +1,24 @@
 """The browser console at `/`: the page built from `web/` into `openbricks_server/daemon/static` (by
 `make web`; shipped in the wheel), or, before the page is built or before signing in, a short page that
-says how to sign in and where the API is."""
+says how to sign in and where the API is. The documentation site (`make docs`) at /manual/."""
 
 from __future__ import annotations
 
 from html import escape
 from pathlib import Path
 
-from fastapi import APIRouter, Request
+from fastapi import APIRouter, FastAPI, Request
 from fastapi.responses import FileResponse, HTMLResponse
+from fastapi.staticfiles import StaticFiles
 
 from openbricks import __version__
+from openbricks_server.docs_site import site_dir
 
 STATIC_DIR = Path(__file__).resolve().parent.parent / "static"
 INDEX = STATIC_DIR / "index.html"
 ASSETS_DIR = STATIC_DIR / "assets"
+
+MANUAL_PATH = "/manual"  # not /docs: that is the API's own page
 
 router = APIRouter(include_in_schema=False)
 
@@ -43,3 +47,20 @@ async def landing(request: Request):
             '<a href="/docs">/docs</a>.</p>'
         )
     return HTMLResponse(_PAGE.format(body=body, version=escape(__version__)))
+
+
+def mount_manual(app: FastAPI) -> None:
+    """The documentation site at /manual/, from the package; a page saying how to build it when it is not."""
+    site = site_dir()
+    if (site / "index.html").is_file():
+        app.mount(MANUAL_PATH, StaticFiles(directory=site, html=True), name="manual")
+        return
+
+    @app.get(MANUAL_PATH + "/", include_in_schema=False, response_class=HTMLResponse)
+    async def manual_not_built():
+        body = (
+            "<p>The manual is not built in this checkout (<code>make docs</code> builds it into the "
+            "package). "
+            'The API is listed at <a href="/docs">/docs</a>.</p>'
+        )
+        return HTMLResponse(_PAGE.format(body=body, version=escape(__version__)), status_code=404)
