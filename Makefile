@@ -17,7 +17,7 @@ MAIN_CHECKOUT := $(abspath $(shell git -C "$(REPO_ROOT)" rev-parse --path-format
 MICROPY_SRC ?= $(firstword $(wildcard $(abspath $(REPO_ROOT)/../$(MICROPY_TARBALL)) $(abspath $(MAIN_CHECKOUT)/../$(MICROPY_TARBALL))) $(abspath $(REPO_ROOT)/../$(MICROPY_TARBALL)))
 MICROPY_BUILD := $(REPO_ROOT)/build/micropython
 UNIX_MICROPYTHON := $(MICROPY_BUILD)/micropython
-NATIVE_SOURCES := $(wildcard firmware/native/*.[ch] firmware/native/user_c_modules/openbricks/*)
+NATIVE_SOURCES := $(wildcard firmware/native/*.[ch] firmware/native/platform/* firmware/native/user_c_modules/openbricks/* firmware/native/user_c_modules/openbricks_bench/*)
 
 .PHONY: setup system-packages test test-fast lint console bench micropython web web-check docs
 

@@ -3,13 +3,33 @@
  */
 #include "hard_tick.h"
 
+#include <stddef.h>
+
+#include "hard_timer.h"
+
 void ob_hard_tick_init(ob_hard_tick_t *tick) {
     tick->count = 0;
+    tick->dispatched = 0;
+    tick->contended = 0;
     tick->running = false;
+    tick->work = NULL;
+    tick->work_ctx = NULL;
 }
 
 void ob_hard_tick_fire(ob_hard_tick_t *tick) {
     tick->count = tick->count + 1u;
+    ob_hard_tick_work_fn_t work = tick->work;
+    if (work == NULL) {
+        return;
+    }
+    if (!ob_hard_timer_try_lock()) {
+        tick->contended = tick->contended + 1u;
+        return;
+    }
+    if (work(tick->work_ctx)) {
+        tick->dispatched = tick->dispatched + 1u;
+    }
+    ob_hard_timer_unlock();
 }
 
 uint32_t ob_hard_tick_expected(uint32_t elapsed_us) {

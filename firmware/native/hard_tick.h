@@ -7,6 +7,10 @@
  * hub, a POSIX thread on host builds) and calls ob_hard_tick_fire() from its
  * own context; this file keeps the count and the verdict of the self-test
  * the manual names (motor_process.hard_tick_selftest() / hard_tick_count()).
+ * With a work function set it is also what runs motor_process on the hub
+ * and the unix port: each period it tries the motor lock and, when every
+ * subscriber is native, ticks the controllers and the serial-bus engine
+ * right there, so a busy interpreter never starves them.
  * Nothing here may allocate, block or call the interpreter.
  */
 #ifndef OB_HARD_TICK_H
@@ -23,14 +27,26 @@
 /* How long a self-test waits for ticks a busy host's timer thread still owes (0 lost, some late). */
 #define OB_HARD_TICK_GRACE_MS 100u
 
+/*
+ * What a period runs in the timer's context, under the motor lock
+ * (hard_timer.h): the control tick of motor_process when everything
+ * subscribed is native (a DriveBase or Servo on native motor IO, a bus engine
+ * on a native UART). Returns true when it ran the control tick.
+ */
+typedef bool (*ob_hard_tick_work_fn_t)(void *ctx);
+
 typedef struct {
-    volatile uint32_t count; /* ticks delivered since the hard tick started */
+    volatile uint32_t count;      /* periods delivered since the hard tick started */
+    volatile uint32_t dispatched; /* periods that ran the control tick in the timer's context */
+    volatile uint32_t contended;  /* periods skipped because the interpreter held the motor lock */
     bool running;
+    ob_hard_tick_work_fn_t work; /* NULL: the tick only counts */
+    void *work_ctx;
 } ob_hard_tick_t;
 
 void ob_hard_tick_init(ob_hard_tick_t *tick);
 
-/* One period elapsed: called by the platform timer, in its context. */
+/* One period elapsed: called by the platform timer, in its context; counts, then runs the work under the lock. */
 void ob_hard_tick_fire(ob_hard_tick_t *tick);
 
 /* Ticks a 1 kHz tick should deliver in elapsed_us. */

@@ -1,5 +1,6 @@
 /*
- * The platform's 1 kHz timer behind the hard tick (hard_tick.h).
+ * The platform's 1 kHz timer behind the hard tick (hard_tick.h), and the lock
+ * that keeps its callback and the interpreter off the controllers at once.
  *
  * Implementations: platform/hard_timer_posix.c (a thread on host builds: the
  * unix MicroPython and the CPython extension) and the hub's esp_timer glue
@@ -22,5 +23,17 @@ uint32_t ob_hard_timer_now_us(void);
 
 /* Sleep (or yield) for about ms milliseconds outside the timer's context. */
 void ob_hard_timer_sleep_ms(uint32_t ms);
+
+/*
+ * The motor lock: the timer's callback and the interpreter never work on the
+ * controllers at the same time. The interpreter takes it (blocking, and
+ * recursively: a locked call may reach another) around each call into a
+ * controller the hard tick runs; the timer only tries it and skips its
+ * period when the interpreter holds it (the clock is measured, so a skipped
+ * period costs one control update, never trajectory time).
+ */
+void ob_hard_timer_lock(void);
+bool ob_hard_timer_try_lock(void);
+void ob_hard_timer_unlock(void);
 
 #endif /* OB_HARD_TIMER_H */

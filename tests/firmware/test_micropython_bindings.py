@@ -17,9 +17,9 @@ import openbricks_native
 ROOT = Path(__file__).resolve().parents[2]
 MODULE_DIR = ROOT / "firmware" / "native" / "user_c_modules" / "openbricks"
 
-# On purpose: MotorIO and _C_API plug the simulator's wheels into the cores in C (host only);
+# On purpose: _C_API plugs the simulator's wheels into the cores in C (host only);
 # interrupt_main and ticks_itself serve the hub's launcher and its self-ticking motor_process.
-HOST_ONLY = {"MotorIO", "_C_API"}
+HOST_ONLY = {"_C_API"}
 HUB_ONLY = {"interrupt_main", "ticks_itself"}
 # The host's parsed frames are struct sequences with their own types; the hub's are attribute tuples
 # with the same fields.

@@ -1,9 +1,11 @@
 /*
  * The hard tick's timer on host builds (hard_timer.h): a detached POSIX thread
  * that wakes on absolute 1 ms deadlines (so sleeping late never drifts the
- * rate) and calls the callback. It touches no interpreter state.
+ * rate) and calls the callback. It touches no interpreter state. The motor
+ * lock is a recursive pthread mutex.
  */
 #define _POSIX_C_SOURCE 200112L
+#define _XOPEN_SOURCE 500 /* PTHREAD_MUTEX_RECURSIVE */
 
 #include <pthread.h>
 #include <time.h>
@@ -14,6 +16,30 @@ static ob_hard_timer_fn_t timer_fn;
 static void *timer_ctx;
 static long timer_period_ns;
 static int started;
+static pthread_mutex_t motor_lock;
+static pthread_once_t motor_lock_once = PTHREAD_ONCE_INIT;
+
+static void motor_lock_init(void) {
+    pthread_mutexattr_t attr;
+    pthread_mutexattr_init(&attr);
+    pthread_mutexattr_settype(&attr, PTHREAD_MUTEX_RECURSIVE);
+    pthread_mutex_init(&motor_lock, &attr);
+    pthread_mutexattr_destroy(&attr);
+}
+
+void ob_hard_timer_lock(void) {
+    pthread_once(&motor_lock_once, motor_lock_init);
+    pthread_mutex_lock(&motor_lock);
+}
+
+bool ob_hard_timer_try_lock(void) {
+    pthread_once(&motor_lock_once, motor_lock_init);
+    return pthread_mutex_trylock(&motor_lock) == 0;
+}
+
+void ob_hard_timer_unlock(void) {
+    pthread_mutex_unlock(&motor_lock);
+}
 
 static void *run(void *unused) {
     (void)unused;

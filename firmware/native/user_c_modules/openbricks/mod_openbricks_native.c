@@ -27,6 +27,7 @@ static const mp_rom_map_elem_t mod_globals_table[] = {
     {MP_ROM_QSTR(MP_QSTR_TrapezoidalProfile), MP_ROM_PTR(&ob_mp_profile_type)},
     {MP_ROM_QSTR(MP_QSTR_Observer), MP_ROM_PTR(&ob_mp_observer_type)},
     {MP_ROM_QSTR(MP_QSTR_Subscriber), MP_ROM_PTR(&ob_mp_subscriber_type)},
+    {MP_ROM_QSTR(MP_QSTR_MotorIO), MP_ROM_PTR(&ob_mp_motor_io_type)},
     {MP_ROM_QSTR(MP_QSTR_MotorProcess), MP_ROM_PTR(&ob_mp_motor_process_type)},
     {MP_ROM_QSTR(MP_QSTR_Servo), MP_ROM_PTR(&ob_mp_servo_type)},
     {MP_ROM_QSTR(MP_QSTR_DriveBase), MP_ROM_PTR(&ob_mp_drivebase_type)},

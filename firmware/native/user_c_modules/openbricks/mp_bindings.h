@@ -64,6 +64,7 @@ typedef struct {
     ob_tick_fn_t tick_fn; /* NULL: built without IO, drive it with update() */
     void *tick_ctx;
     mp_obj_t error;       /* first exception of the current call, or MP_OBJ_NULL */
+    bool hard_safe;       /* tick_fn calls no Python and allocates nothing: the hard tick may run it */
 } ob_mp_subscriber_t;
 
 extern const mp_obj_type_t ob_mp_subscriber_type;
@@ -73,6 +74,51 @@ void ob_mp_subscriber_stash(ob_mp_subscriber_t *sub, mp_obj_t exc);
 
 /* Raise the stashed exception, if any, clearing it. */
 void ob_mp_subscriber_raise(ob_mp_subscriber_t *sub);
+
+/* ---- Native motor IO and wires (mp_motor_io.c). ----
+ *
+ * A MotorIO object carries an ob_motor_io_t whose functions never call
+ * Python (a serial-bus engine's slot): a Servo(io=) or DriveBase(left_io=,
+ * right_io=) over it ticks with no Python call, so the hard tick may run it.
+ * A native UART (a type deriving from ob_mp_native_uart_type: a host test's
+ * in-memory bus) hands the serial-bus engine an ob_uart_t the same way. */
+typedef struct {
+    mp_obj_base_t base;
+    ob_motor_io_t io;
+} ob_mp_motor_io_t;
+
+extern const mp_obj_type_t ob_mp_motor_io_type;
+
+/* True and *io filled when obj is a MotorIO whose provider set its functions. */
+bool ob_mp_motor_io_get(mp_obj_t obj, ob_motor_io_t *io);
+
+#include "uart.h"
+typedef struct {
+    mp_obj_base_t base;
+    ob_uart_t uart;
+} ob_mp_native_uart_t;
+
+extern const mp_obj_type_t ob_mp_native_uart_type;
+
+/* The ob_uart_t of a native UART object, or NULL for any other object. */
+const ob_uart_t *ob_mp_native_uart_get(mp_obj_t obj);
+
+/* ---- The hard tick and the motor lock (mp_hard_tick.c, mp_hard_lock.c). ---- */
+
+/* Start the 1 kHz hard tick (idempotent); raises OSError when the platform timer cannot start. */
+void ob_mp_hard_tick_start(void);
+
+/* Run by the hard tick each period under the motor lock (mp_scheduler.c): ticks motor_process when
+ * every subscriber is hard-safe; true when it did. */
+bool ob_mp_motor_process_hard_work(void *unused);
+
+/* True while the hard tick runs motor_process by itself (everything subscribed is hard-safe). */
+bool ob_mp_motor_process_hard_ticked(void);
+
+/* For a type's attr slot: a method of locals_dict, loaded, comes back bound to self and called under
+ * the motor lock, so the interpreter never changes a controller in the middle of a hard tick.
+ * Anything else continues the normal lookup. Stores are refused (read-only). */
+void ob_mp_locked_attr(mp_obj_t self_in, qstr attr, mp_obj_t *dest, const mp_obj_dict_t *locals_dict);
 
 /* ---- Types and objects of the module. ---- */
 

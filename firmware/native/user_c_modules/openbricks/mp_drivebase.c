@@ -2,8 +2,9 @@
  * DriveBase: the 2-DOF drivebase core (host: py_drivebase.c).
  *
  * With the six IO callables (read_left/right() -> degrees or None,
- * write_left/right(duty_pct), coast_left/right()) it is a native
- * motor_process subscriber; with none, update(now_ms, left_deg, right_deg
+ * write_left/right(duty_pct), coast_left/right()), or with left_io=/right_io=
+ * native MotorIOs (a bus engine's slots: no Python per tick, so the hard tick
+ * may run it), it is a native motor_process subscriber; with none, update(now_ms, left_deg, right_deg
  * [, heading_deg]) -> (left, right) runs one period with no Python call. A
  * callable that raises must not stop the period (a halt's coast has to reach
  * both motors), so its exception is kept and raised when the period ends, and
@@ -152,9 +153,16 @@ static mp_obj_t drivebase_make_new(const mp_obj_type_t *type, size_t n_args, siz
     if (args[ARG_watchdog_ms].u_int < 1) {
         mp_raise_ValueError(MP_ERROR_TEXT("DriveBase(): watchdog_ms must be >= 1 ms"));
     }
-    if (args[ARG_left_io].u_obj != mp_const_none || args[ARG_right_io].u_obj != mp_const_none) {
-        mp_raise_TypeError(MP_ERROR_TEXT("DriveBase(): left_io=/right_io= (native wheel IO) exist in the host build "
-                                         "only; on the hub pass the six IO callables"));
+    mp_obj_t native_io[2] = {args[ARG_left_io].u_obj, args[ARG_right_io].u_obj};
+    ob_motor_io_t native_wheel_io[2];
+    bool native = native_io[0] != mp_const_none || native_io[1] != mp_const_none;
+    for (int i = 0; native && i < 2; i++) {
+        if (!ob_mp_motor_io_get(native_io[i], &native_wheel_io[i])) {
+            mp_raise_msg_varg(&mp_type_TypeError,
+                              MP_ERROR_TEXT("DriveBase(): %s must be a native MotorIO (a bus engine's motor_io(slot)), "
+                                            "not %s; give both left_io= and right_io=, or the six IO callables"),
+                              i == 0 ? "left_io" : "right_io", mp_obj_get_type_str(native_io[i]));
+        }
     }
     static const char *const io_names[6] = {"read_left", "read_right", "write_left", "write_right", "coast_left",
                                             "coast_right"};
@@ -171,6 +179,9 @@ static mp_obj_t drivebase_make_new(const mp_obj_type_t *type, size_t n_args, siz
                               mp_obj_get_type_str(io[i]));
         }
         given++;
+    }
+    if (native && given != 0) {
+        mp_raise_TypeError(MP_ERROR_TEXT("DriveBase(): give left_io=/right_io= or the six IO callables, not both"));
     }
     if (given != 0 && given != 6) {
         for (int i = 0; i < 6; i++) {
@@ -206,12 +217,21 @@ static mp_obj_t drivebase_make_new(const mp_obj_type_t *type, size_t n_args, siz
             wheel_io[i] = (ob_motor_io_t){io_read_angle, io_write_duty, io_write_coast, &self->slots[i]};
         }
     }
+    if (native) {
+        /* The providers stay referenced through read[] (never called: has_io() only looks at it). */
+        for (int i = 0; i < 2; i++) {
+            wheel_io[i] = native_wheel_io[i];
+            self->read[i] = native_io[i];
+        }
+    }
     ob_drivebase_init(&self->db, &wheel_io[0], &wheel_io[1], diameter_mm, track_mm);
     self->db.watchdog_ms = (uint32_t)args[ARG_watchdog_ms].u_int;
-    if (given == 6) {
+    if (given == 6 || native) {
         self->sub.tick_fn = drivebase_tick_fn;
         self->sub.tick_ctx = self;
     }
+    /* Native wheels and no Python heading: a tick calls no Python, so the hard tick may run it. */
+    self->sub.hard_safe = native && self->heading == MP_OBJ_NULL;
     return MP_OBJ_FROM_PTR(self);
 }
 
@@ -514,11 +534,17 @@ static const mp_rom_map_elem_t drivebase_locals_table[] = {
 };
 static MP_DEFINE_CONST_DICT(drivebase_locals, drivebase_locals_table);
 
+/* Methods run under the motor lock: the hard tick may be ticking this drive base (mp_hard_lock.c). */
+static void drivebase_attr(mp_obj_t self_in, qstr attr, mp_obj_t *dest) {
+    ob_mp_locked_attr(self_in, attr, dest, &drivebase_locals);
+}
+
 MP_DEFINE_CONST_OBJ_TYPE(
     ob_mp_drivebase_type,
     MP_QSTR_DriveBase,
     MP_TYPE_FLAG_NONE,
     make_new, drivebase_make_new,
+    attr, drivebase_attr,
     locals_dict, &drivebase_locals,
     parent, &ob_mp_subscriber_type
     );

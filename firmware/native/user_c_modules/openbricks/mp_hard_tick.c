@@ -1,9 +1,13 @@
 /*
- * motor_process.hard_tick_count() and hard_tick_selftest() (host: py_hard_tick.c).
+ * The hard tick in the MicroPython binding, and motor_process.hard_tick_count()
+ * and hard_tick_selftest() (host: py_hard_tick.c).
  *
  * The hard tick (hard_tick.h) runs on ESP-IDF's esp_timer on the hub
  * (mp_hard_timer_esp32.c) and on a POSIX thread in the unix port
- * (platform/hard_timer_posix.c); either way it never touches the VM.
+ * (platform/hard_timer_posix.c); either way it never touches the VM. It
+ * starts when motor_process gets its first subscriber (or with a self-test)
+ * and each period runs motor_process's hard work (mp_scheduler.c): the
+ * control tick itself when every subscriber is native.
  */
 #include "hard_tick.h"
 #include "hard_timer.h"
@@ -14,6 +18,18 @@ static ob_hard_tick_t hard_tick;
 
 static void fire(void *ctx) {
     ob_hard_tick_fire(ctx);
+}
+
+void ob_mp_hard_tick_start(void) {
+    if (hard_tick.running) {
+        return;
+    }
+    hard_tick.work = ob_mp_motor_process_hard_work;
+    hard_tick.work_ctx = NULL;
+    if (!ob_hard_timer_start(fire, &hard_tick, OB_HARD_TICK_PERIOD_US)) {
+        mp_raise_msg(&mp_type_OSError, MP_ERROR_TEXT("motor_process: the 1 kHz hard timer could not be started"));
+    }
+    hard_tick.running = true;
 }
 
 static mp_obj_t hard_tick_count(mp_obj_t self_in) {
@@ -35,13 +51,13 @@ static mp_obj_t hard_tick_selftest(size_t n_args, const mp_obj_t *pos_args, mp_m
                           (int)duration_ms);
     }
     if (!hard_tick.running) {
-        if (!ob_hard_timer_start(fire, &hard_tick, OB_HARD_TICK_PERIOD_US)) {
-            mp_raise_msg(&mp_type_OSError, MP_ERROR_TEXT("hard_tick_selftest: the 1 kHz hard timer could not be started"));
-        }
-        hard_tick.running = true;
+        ob_mp_hard_tick_start();
         mp_hal_delay_ms(OB_HARD_TICK_SETTLE_MS); /* a timer just started counts from its first period */
     }
     uint32_t count0 = hard_tick.count;
+    uint32_t dispatched0 = hard_tick.dispatched;
+    uint32_t contended0 = hard_tick.contended;
+    bool dispatching = ob_mp_motor_process_hard_ticked();
     uint32_t start_us = ob_hard_timer_now_us();
     mp_hal_delay_ms((mp_uint_t)duration_ms);
     uint32_t elapsed_us = ob_hard_timer_now_us() - start_us;
@@ -57,6 +73,15 @@ static mp_obj_t hard_tick_selftest(size_t n_args, const mp_obj_t *pos_args, mp_m
                           MP_ERROR_TEXT("hard_tick_selftest: %u hard ticks in %u us, expected about %u: the 1 kHz hard "
                                         "tick is not keeping its rate"),
                           (unsigned)ticks, (unsigned)elapsed_us, (unsigned)expected);
+    }
+    /* While it runs the controllers, each period must also have run motor_process (not been skipped). */
+    uint32_t dispatched = hard_tick.dispatched - dispatched0;
+    if (dispatching && ob_mp_motor_process_hard_ticked() && !ob_hard_tick_rate_ok(dispatched, elapsed_us)) {
+        mp_raise_msg_varg(&mp_type_RuntimeError,
+                          MP_ERROR_TEXT("hard_tick_selftest: the hard tick ran motor_process %u times in %u us "
+                                        "(expected about %u; %u periods found the interpreter holding the motor lock)"),
+                          (unsigned)dispatched, (unsigned)elapsed_us, (unsigned)expected,
+                          (unsigned)(hard_tick.contended - contended0));
     }
     mp_obj_t items[2] = {mp_obj_new_int_from_uint(ticks), mp_obj_new_int_from_uint(expected)};
     return mp_obj_new_tuple(2, items);

@@ -6,11 +6,17 @@
  * A subscriber's exception is held until every subscriber of the tick ran,
  * then the first one is raised.
  *
- * On the hub the module's motor_process ticks itself: while anything is
- * subscribed, a 1 ms esp_timer queues a tick into the VM (mp_sched_schedule;
- * subscribers may call Python, which only the VM thread may do), and the tick
- * reads the measured mp_hal_ticks_ms(). A late or dropped tick therefore costs
- * control updates, never trajectory time.
+ * The module's motor_process is run by the hard tick (mp_hard_tick.c; the
+ * esp_timer task on the hub, a thread on the unix port), which starts with
+ * its first subscriber. When every subscriber is native and calls no Python
+ * (a DriveBase or Servo on a bus engine's slots, the engine on a native UART)
+ * the hard tick runs the round itself, under the motor lock, so a busy
+ * interpreter never starves the controllers; tick() from Python then does
+ * nothing, so nothing runs twice. Otherwise the hub queues the round into the
+ * VM (mp_sched_schedule: only the VM thread may call Python), and other
+ * builds are ticked by their caller. Either way each round reads the measured
+ * mp_hal_ticks_ms(): a late or dropped tick costs control updates, never
+ * trajectory time.
  *
  * Memory: the module's motor_process holds references to its subscribers, so
  * it lives on the GC heap behind a registered root pointer, not in static
@@ -23,14 +29,13 @@
 
 #include "mp_bindings.h"
 
+#include "hard_timer.h"
+
 #if defined(ESP_PLATFORM)
-#include "esp_timer.h"
 #define OB_HUB_TICK (1)
 #else
 #define OB_HUB_TICK (0)
 #endif
-
-#define OB_HUB_TICK_PERIOD_US (1000)
 
 /* ---- Subscriber. ---- */
 
@@ -131,22 +136,40 @@ static ob_mp_subscriber_t *as_subscriber(mp_obj_t obj) {
     return NULL;
 }
 
-/* ---- The hub's own tick. ---- */
-
-#if OB_HUB_TICK
-
-static esp_timer_handle_t hub_tick_timer;
-static bool hub_tick_started;
-static volatile bool hub_tick_queued;
-static bool hub_tick_error_shown;
+/* ---- The hard tick's work. ---- */
 
 static void process_tick(motor_process_obj_t *self, uint32_t now_ms);
 
+/* Every subscriber's tick is native and calls no Python: the timer's context may run the round. */
+static bool all_hard_safe(const motor_process_obj_t *self) {
+    if (self->sched.count == 0) {
+        return false;
+    }
+    for (int i = 0; i < self->sched.count; i++) {
+        const slot_t *slot = (const slot_t *)self->sched.subscribers[i].ctx;
+        if (slot->native == NULL || !slot->native->hard_safe) {
+            return false;
+        }
+    }
+    return true;
+}
+
+bool ob_mp_motor_process_hard_ticked(void) {
+    mp_obj_t process = MP_STATE_VM(openbricks_motor_process);
+    return process != MP_OBJ_NULL && all_hard_safe(MP_OBJ_TO_PTR(process));
+}
+
+#if OB_HUB_TICK
+
+static volatile bool hub_tick_queued;
+static bool hub_tick_error_shown;
+
+/* The VM's tick, for subscribers that call Python (encoder motors' IO callables, user callables). */
 static mp_obj_t hub_tick_run(mp_obj_t unused) {
     (void)unused;
     hub_tick_queued = false;
     mp_obj_t process = MP_STATE_VM(openbricks_motor_process);
-    if (process == MP_OBJ_NULL) {
+    if (process == MP_OBJ_NULL || ob_mp_motor_process_hard_ticked()) {
         return mp_const_none;
     }
     nlr_buf_t nlr;
@@ -164,9 +187,8 @@ static mp_obj_t hub_tick_run(mp_obj_t unused) {
 }
 static MP_DEFINE_CONST_FUN_OBJ_1(hub_tick_run_obj, hub_tick_run);
 
-/* esp_timer task context: only queue the tick for the VM, never touch Python objects here. */
-static void hub_tick_fire(void *arg) {
-    (void)arg;
+/* From the hard tick: queue the VM's tick; never touch Python objects here. */
+static void hub_tick_queue(void) {
     if (hub_tick_queued) {
         return; /* the previous tick has not run yet: this one is dropped, the clock stays measured */
     }
@@ -178,56 +200,37 @@ static void hub_tick_fire(void *arg) {
     }
 }
 
-static void hub_tick_follow(motor_process_obj_t *self) {
-    if (!self->is_module_process) {
-        return;
-    }
-    bool want = self->sched.count > 0;
-    if (want == hub_tick_started) {
-        return;
-    }
-    if (want) {
-        if (hub_tick_timer == NULL) {
-            const esp_timer_create_args_t args = {
-                .callback = hub_tick_fire,
-                .arg = NULL,
-                .dispatch_method = ESP_TIMER_TASK,
-                .name = "ob_motor_tick",
-                .skip_unhandled_events = true,
-            };
-            if (esp_timer_create(&args, &hub_tick_timer) != ESP_OK) {
-                hub_tick_timer = NULL;
-                mp_raise_msg(&mp_type_OSError, MP_ERROR_TEXT("motor_process: cannot create the 1 ms tick timer"));
-            }
-        }
-        if (esp_timer_start_periodic(hub_tick_timer, OB_HUB_TICK_PERIOD_US) != ESP_OK) {
-            mp_raise_msg(&mp_type_OSError, MP_ERROR_TEXT("motor_process: cannot start the 1 ms tick timer"));
-        }
-        hub_tick_started = true;
-    } else {
-        esp_timer_stop(hub_tick_timer);
-        hub_tick_started = false;
-    }
-}
-
-static void hub_tick_stop(void) {
-    if (hub_tick_started) {
-        esp_timer_stop(hub_tick_timer);
-        hub_tick_started = false;
-    }
-    hub_tick_queued = false;
-}
-
 #else
 
-static void hub_tick_follow(motor_process_obj_t *self) {
-    (void)self; /* this build is ticked by its caller (robotics.tick, a simulator, a test) */
-}
-
-static void hub_tick_stop(void) {
+static void hub_tick_queue(void) {
+    /* This build's Python subscribers are ticked by its caller (robotics.tick, a simulator, a test). */
 }
 
 #endif
+
+/*
+ * Each hard period, in the timer's context, under the motor lock: when every
+ * subscriber is native the control round runs right here, on the measured
+ * millisecond clock, whatever the interpreter is doing; otherwise the hub
+ * queues it for the VM as before.
+ */
+bool ob_mp_motor_process_hard_work(void *unused) {
+    (void)unused;
+    mp_obj_t process = MP_STATE_VM(openbricks_motor_process);
+    if (process == MP_OBJ_NULL) {
+        return false;
+    }
+    motor_process_obj_t *self = MP_OBJ_TO_PTR(process);
+    if (!all_hard_safe(self)) {
+        if (self->sched.count > 0) {
+            hub_tick_queue();
+        }
+        return false;
+    }
+    /* Hard-safe subscribers never leave an exception: there is nothing to raise here. */
+    ob_scheduler_tick(&self->sched, (uint32_t)mp_hal_ticks_ms());
+    return true;
+}
 
 /* ---- Methods. ---- */
 
@@ -295,7 +298,9 @@ static mp_obj_t motor_process_subscribe(mp_obj_t self_in, mp_obj_t obj) {
         slot->native = NULL;
         mp_raise_msg(&mp_type_RuntimeError, MP_ERROR_TEXT("motor_process.subscribe: the scheduler registry is full"));
     }
-    hub_tick_follow(self);
+    if (self->is_module_process) {
+        ob_mp_hard_tick_start();
+    }
     return mp_const_none;
 }
 static MP_DEFINE_CONST_FUN_OBJ_2(motor_process_subscribe_obj, motor_process_subscribe);
@@ -305,7 +310,6 @@ static mp_obj_t motor_process_unsubscribe(mp_obj_t self_in, mp_obj_t obj) {
     slot_t *slot = find_slot(self, obj);
     if (slot != NULL) {
         release_slot(self, slot);
-        hub_tick_follow(self);
     }
     return mp_const_none;
 }
@@ -329,10 +333,14 @@ static void process_tick(motor_process_obj_t *self, uint32_t now_ms) {
 }
 
 static mp_obj_t motor_process_tick(size_t n_args, const mp_obj_t *args) {
+    motor_process_obj_t *self = MP_OBJ_TO_PTR(args[0]);
+    if (self->is_module_process && ob_mp_motor_process_hard_ticked()) {
+        return mp_const_none; /* the hard tick runs these subscribers: a second tick would run them twice */
+    }
     /* tick() with no time reads the measured millisecond clock, as the hub's own tick does. */
     uint32_t now_ms = n_args > 1 && args[1] != mp_const_none ? ob_mp_time_ms(args[1], "motor_process.tick")
                                                               : (uint32_t)mp_hal_ticks_ms();
-    process_tick(MP_OBJ_TO_PTR(args[0]), now_ms);
+    process_tick(self, now_ms);
     return mp_const_none;
 }
 static MP_DEFINE_CONST_FUN_OBJ_VAR_BETWEEN(motor_process_tick_obj, 1, 2, motor_process_tick);
@@ -357,7 +365,6 @@ static mp_obj_t motor_process_reset(mp_obj_t self_in) {
         }
     }
     ob_scheduler_init(&self->sched);
-    hub_tick_follow(self);
     return mp_const_none;
 }
 static MP_DEFINE_CONST_FUN_OBJ_1(motor_process_reset_obj, motor_process_reset);
@@ -377,14 +384,17 @@ static MP_DEFINE_CONST_FUN_OBJ_1(motor_process_subscribers_obj, motor_process_su
 static mp_obj_t motor_process_del(mp_obj_t self_in) {
     motor_process_obj_t *self = MP_OBJ_TO_PTR(self_in);
     if (self->is_module_process) {
-        hub_tick_stop();
+        ob_hard_timer_lock(); /* no hard tick may be inside a round of it */
         if (MP_STATE_VM(openbricks_motor_process) == self_in) {
             MP_STATE_VM(openbricks_motor_process) = MP_OBJ_NULL;
         }
+        ob_hard_timer_unlock();
     }
     return mp_const_none;
 }
 static MP_DEFINE_CONST_FUN_OBJ_1(motor_process_del_obj, motor_process_del);
+
+static const mp_obj_dict_t motor_process_locals;
 
 static void motor_process_attr(mp_obj_t self_in, qstr attr, mp_obj_t *dest) {
     if (dest[0] != MP_OBJ_NULL) {
@@ -404,8 +414,12 @@ static void motor_process_attr(mp_obj_t self_in, qstr attr, mp_obj_t *dest) {
         case MP_QSTR_count:
             dest[0] = MP_OBJ_NEW_SMALL_INT(self->sched.count);
             break;
+        case MP_QSTR_hard_tick_count:
+        case MP_QSTR_hard_tick_selftest:
+            dest[1] = MP_OBJ_SENTINEL; /* unlocked: the self-test waits for the hard tick to run */
+            break;
         default:
-            dest[1] = MP_OBJ_SENTINEL;
+            ob_mp_locked_attr(self_in, attr, dest, &motor_process_locals);
             break;
     }
 }

@@ -7,7 +7,11 @@
  * request is written, so the adapter keeps the wire's clock itself: each byte
  * costs its time at baud, and a read that finds nothing costs the whole wait.
  * On the hub, serial_bus() builds the engine over ESP-IDF's UART driver
- * instead (mp_uart_esp32.c), which never calls Python.
+ * instead (mp_uart_esp32.c), which never calls Python; on host builds a
+ * native UART object (an in-memory bus of a test) does the same. An engine
+ * over a wire that never calls Python is hard-safe: the hard tick runs it
+ * from the timer's context (mp_scheduler.c), and its methods, like its
+ * slots' motor IO, are called under the motor lock (mp_hard_lock.c).
  *
  * The engine subscribes itself to motor_process when it adopts its first
  * servo and unsubscribes when the last one is released. An exception from a
@@ -28,10 +32,10 @@ typedef struct {
     uint32_t byte_us;
 } serial_bus_obj_t;
 
+/* A slot's motor IO: a MotorIO (its functions never call Python), so a controller over it is hard-safe. */
 typedef struct {
-    mp_obj_base_t base;
+    ob_mp_motor_io_t base;
     serial_bus_obj_t *owner;
-    ob_motor_io_t io;
 } slot_io_obj_t;
 
 static const mp_obj_type_t slot_io_type;
@@ -127,6 +131,7 @@ static serial_bus_obj_t *new_engine(const mp_obj_type_t *type, mp_obj_t uart, co
     ob_serial_bus_init(&self->bus, native != NULL ? native : &wire, baud);
     self->sub.tick_fn = serial_bus_tick_fn;
     self->sub.tick_ctx = self;
+    self->sub.hard_safe = native != NULL;
     return self;
 }
 
@@ -139,6 +144,10 @@ static mp_obj_t serial_bus_make_new(const mp_obj_type_t *type, size_t n_args, si
     mp_arg_val_t vals[MP_ARRAY_SIZE(allowed)];
     mp_arg_parse_all_kw_array(n_args, n_kw, args, MP_ARRAY_SIZE(allowed), allowed, vals);
     mp_obj_t uart = vals[ARG_uart].u_obj;
+    const ob_uart_t *native = ob_mp_native_uart_get(uart);
+    if (native != NULL) {
+        return MP_OBJ_FROM_PTR(new_engine(type, uart, native, (uint32_t)vals[ARG_baud].u_int));
+    }
     static const qstr needed[] = {MP_QSTR_write, MP_QSTR_read, MP_QSTR_any};
     for (size_t i = 0; i < MP_ARRAY_SIZE(needed); i++) {
         mp_obj_t dest[2];
@@ -234,7 +243,7 @@ static mp_obj_t serial_bus_motor_io(mp_obj_t self_in, mp_obj_t slot_in) {
     ob_serial_bus_slot_t *slot = slot_arg(self, slot_in, NULL);
     slot_io_obj_t *io = mp_obj_malloc(slot_io_obj_t, &slot_io_type);
     io->owner = self;
-    io->io = ob_serial_bus_motor_io(slot);
+    io->base.io = ob_serial_bus_motor_io(slot);
     return MP_OBJ_FROM_PTR(io);
 }
 static MP_DEFINE_CONST_FUN_OBJ_2(serial_bus_motor_io_obj, serial_bus_motor_io);
@@ -300,11 +309,16 @@ static const mp_rom_map_elem_t serial_bus_locals_table[] = {
 };
 static MP_DEFINE_CONST_DICT(serial_bus_locals, serial_bus_locals_table);
 
+static void serial_bus_attr(mp_obj_t self_in, qstr attr, mp_obj_t *dest) {
+    ob_mp_locked_attr(self_in, attr, dest, &serial_bus_locals);
+}
+
 MP_DEFINE_CONST_OBJ_TYPE(
     ob_mp_serial_bus_type,
     MP_QSTR_SerialBus,
     MP_TYPE_FLAG_NONE,
     make_new, serial_bus_make_new,
+    attr, serial_bus_attr,
     locals_dict, &serial_bus_locals,
     parent, &ob_mp_subscriber_type
     );
@@ -314,20 +328,20 @@ MP_DEFINE_CONST_OBJ_TYPE(
 static mp_obj_t slot_io_read_angle(mp_obj_t self_in) {
     slot_io_obj_t *self = MP_OBJ_TO_PTR(self_in);
     float angle;
-    return self->io.read_angle(self->io.ctx, &angle) ? mp_obj_new_float(angle) : mp_const_none;
+    return self->base.io.read_angle(self->base.io.ctx, &angle) ? mp_obj_new_float(angle) : mp_const_none;
 }
 static MP_DEFINE_CONST_FUN_OBJ_1(slot_io_read_angle_obj, slot_io_read_angle);
 
 static mp_obj_t slot_io_write_duty(mp_obj_t self_in, mp_obj_t duty_in) {
     slot_io_obj_t *self = MP_OBJ_TO_PTR(self_in);
-    self->io.write_duty(self->io.ctx, ob_mp_float(duty_in, "write_duty", "duty_pct"));
+    self->base.io.write_duty(self->base.io.ctx, ob_mp_float(duty_in, "write_duty", "duty_pct"));
     return mp_const_none;
 }
 static MP_DEFINE_CONST_FUN_OBJ_2(slot_io_write_duty_obj, slot_io_write_duty);
 
 static mp_obj_t slot_io_coast(mp_obj_t self_in) {
     slot_io_obj_t *self = MP_OBJ_TO_PTR(self_in);
-    self->io.write_coast(self->io.ctx);
+    self->base.io.write_coast(self->base.io.ctx);
     return mp_const_none;
 }
 static MP_DEFINE_CONST_FUN_OBJ_1(slot_io_coast_obj, slot_io_coast);
@@ -339,11 +353,17 @@ static const mp_rom_map_elem_t slot_io_locals_table[] = {
 };
 static MP_DEFINE_CONST_DICT(slot_io_locals, slot_io_locals_table);
 
+static void slot_io_attr(mp_obj_t self_in, qstr attr, mp_obj_t *dest) {
+    ob_mp_locked_attr(self_in, attr, dest, &slot_io_locals);
+}
+
 static MP_DEFINE_CONST_OBJ_TYPE(
     slot_io_type,
     MP_QSTR_SerialBusSlotIO,
     MP_TYPE_FLAG_NONE,
-    locals_dict, &slot_io_locals
+    attr, slot_io_attr,
+    locals_dict, &slot_io_locals,
+    parent, &ob_mp_motor_io_type
     );
 
 /* ---- serial_bus(uart_id, ...) ---- */
@@ -376,7 +396,7 @@ static mp_obj_t mod_serial_bus(size_t n_args, const mp_obj_t *pos_args, mp_map_t
         MP_OBJ_NEW_QSTR(MP_QSTR_timeout), MP_OBJ_NEW_SMALL_INT(0),
     };
     mp_obj_t uart = mp_call_function_n_kw(uart_type, 1, 4, call_args);
-    return MP_OBJ_FROM_PTR(new_engine(&ob_mp_serial_bus_type, uart, NULL, baud));
+    return MP_OBJ_FROM_PTR(new_engine(&ob_mp_serial_bus_type, uart, ob_mp_native_uart_get(uart), baud));
     #endif
 }
 MP_DEFINE_CONST_FUN_OBJ_KW(ob_mp_serial_bus_obj, 1, mod_serial_bus);

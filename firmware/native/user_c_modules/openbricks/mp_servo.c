@@ -151,14 +151,20 @@ static mp_obj_t servo_make_new(const mp_obj_type_t *type, size_t n_args, size_t 
     mp_obj_t write = lookup_kw(&kw_args, MP_QSTR_write_duty);
     mp_obj_t coast = lookup_kw(&kw_args, MP_QSTR_write_coast);
     mp_obj_t duty_limit = lookup_kw(&kw_args, MP_QSTR_duty_limit);
-    if (lookup_kw(&kw_args, MP_QSTR_io) != MP_OBJ_NULL) {
-        mp_raise_TypeError(MP_ERROR_TEXT("Servo: io= (a native motor IO) exists in the host build only; on the hub "
-                                         "pass read_angle=, write_duty= and write_coast="));
+    mp_obj_t native_io = lookup_kw(&kw_args, MP_QSTR_io);
+    ob_motor_io_t native_motor_io;
+    if (native_io != MP_OBJ_NULL && !ob_mp_motor_io_get(native_io, &native_motor_io)) {
+        mp_raise_msg_varg(&mp_type_TypeError,
+                          MP_ERROR_TEXT("Servo: io= must be a native MotorIO (a bus engine's motor_io(slot)), not %s"),
+                          mp_obj_get_type_str(native_io));
     }
     require_callable(read, "read_angle");
     require_callable(write, "write_duty");
     require_callable(coast, "write_coast");
     int given = (read != MP_OBJ_NULL) + (write != MP_OBJ_NULL) + (coast != MP_OBJ_NULL);
+    if (native_io != MP_OBJ_NULL && given != 0) {
+        mp_raise_TypeError(MP_ERROR_TEXT("Servo: give io= or read_angle=, write_duty= and write_coast=, not both"));
+    }
     if (given != 0 && given != 3) {
         mp_raise_TypeError(MP_ERROR_TEXT("Servo: give all of read_angle, write_duty and write_coast (a motor that "
                                          "is ticked by motor_process), or none of them (drive it with update())"));
@@ -181,10 +187,20 @@ static mp_obj_t servo_make_new(const mp_obj_type_t *type, size_t n_args, size_t 
     self->read_angle = read;
     self->write_duty = write;
     self->write_coast = coast;
-    bool ticked = given == 3; /* by motor_process; else stepped with update() */
-    ob_motor_io_t io = ticked ? (ob_motor_io_t){io_read_angle, io_write_duty, io_write_coast, self} : ob_servo_direct_io;
-    self->sub.tick_fn = ticked ? servo_tick_fn : NULL;
-    self->sub.tick_ctx = ticked ? self : NULL;
+    ob_motor_io_t io;
+    self->sub.hard_safe = false;
+    if (native_io != MP_OBJ_NULL) {
+        io = native_motor_io;
+        self->read_angle = native_io; /* keeps the provider alive; never called */
+        self->sub.tick_fn = servo_tick_fn;
+        self->sub.tick_ctx = self;
+        self->sub.hard_safe = true; /* no Python per tick: the hard tick may run it */
+    } else {
+        bool ticked = given == 3; /* by motor_process; else stepped with update() */
+        io = ticked ? (ob_motor_io_t){io_read_angle, io_write_duty, io_write_coast, self} : ob_servo_direct_io;
+        self->sub.tick_fn = ticked ? servo_tick_fn : NULL;
+        self->sub.tick_ctx = ticked ? self : NULL;
+    }
     ob_servo_init(&self->servo, &io, &cfg);
     return MP_OBJ_FROM_PTR(self);
 }
@@ -428,6 +444,8 @@ static mp_obj_t servo_state(mp_obj_t self_in) {
 }
 static MP_DEFINE_CONST_FUN_OBJ_1(servo_state_obj, servo_state);
 
+static const mp_obj_dict_t servo_locals;
+
 static void servo_attr(mp_obj_t self_in, qstr attr, mp_obj_t *dest) {
     if (dest[0] != MP_OBJ_NULL) {
         return; /* read-only */
@@ -447,7 +465,7 @@ static void servo_attr(mp_obj_t self_in, qstr attr, mp_obj_t *dest) {
             dest[0] = mp_obj_new_float(self->servo.duty_limit_pct);
             break;
         default:
-            dest[1] = MP_OBJ_SENTINEL;
+            ob_mp_locked_attr(self_in, attr, dest, &servo_locals); /* methods: under the motor lock */
             break;
     }
 }
