@@ -1,8 +1,9 @@
 """esptool as a separate process, with its output read for the chip name and the write progress.
 
 esptool is GPL-licensed and configures a process-wide logger, so it never runs inside our process: the
-CLI (and later the daemon, flashing twenty hubs at once) starts `python -m esptool` per operation and
-parses what it prints. Both output styles are understood: esptool 5's one-line-per-update progress bar
+CLI and the console daemon (flashing twenty hubs at once, one process per port) start `python -m esptool`
+per operation as an asyncio subprocess and parse what it prints; a cancelled operation kills its esptool.
+Both output styles are understood: esptool 5's one-line-per-update progress bar
 ("Writing at 0x00010000 [====   ]  35.1% 12345/65536 bytes ...") and esptool 4's
 "Writing at 0x00010000... (35 %)"; lines may end in \\r (redrawn in place) or \\n.
 
@@ -12,10 +13,10 @@ that records its arguments.
 
 from __future__ import annotations
 
+import asyncio
 import os
 import re
 import shlex
-import subprocess
 import sys
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -72,15 +73,19 @@ class Esptool:
         self.port = port
         self.echo = echo
 
-    def _run(
+    async def _run(
         self, args: list[str], on_line: Callable[[str], None] | None = None, what: str = ""
     ) -> EsptoolResult:
         argv = esptool_command() + args
         if self.echo:
             self.echo("$ " + shlex.join(argv))
         try:
-            proc = subprocess.Popen(
-                argv, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL
+            proc = await asyncio.create_subprocess_exec(
+                *argv,
+                stdout=asyncio.subprocess.PIPE,
+                stderr=asyncio.subprocess.STDOUT,
+                stdin=asyncio.subprocess.DEVNULL,
+                start_new_session=True,  # a Ctrl-C at the terminal is ours to handle, not esptool's
             )
         except OSError as exc:
             raise EsptoolError(
@@ -89,9 +94,9 @@ class Esptool:
         result = EsptoolResult()
         pending = b""
         assert proc.stdout is not None
-        with proc:
+        try:
             while True:
-                chunk = proc.stdout.read1(4096)
+                chunk = await proc.stdout.read(4096)
                 if not chunk:
                     break
                 pending += chunk
@@ -101,6 +106,11 @@ class Esptool:
                     self._line(raw, result, on_line)
             if pending:
                 self._line(pending, result, on_line)
+            await proc.wait()
+        finally:
+            if proc.returncode is None:  # cancelled (or the reader failed): esptool must not live on
+                proc.kill()
+                await proc.wait()
         if proc.returncode != 0:
             raise EsptoolError(_failure(what, self.port, result.lines, proc.returncode))
         return result
@@ -114,9 +124,9 @@ class Esptool:
         if on_line:
             on_line(line)
 
-    def probe_chip(self) -> str:
+    async def probe_chip(self) -> str:
         """The connected chip's esptool name (e.g. 'esp32s3')."""
-        result = self._run(["--chip", "auto", "--port", self.port, "chip-id"], what="probing the chip")
+        result = await self._run(["--chip", "auto", "--port", self.port, "chip-id"], what="probing the chip")
         chip = parse_chip(result.lines)
         if chip is None:
             raise EsptoolError(
@@ -124,10 +134,10 @@ class Esptool:
             )
         return chip
 
-    def erase(self, chip: str) -> None:
-        self._run(["--chip", chip, "--port", self.port, "erase-flash"], what="erasing the flash")
+    async def erase(self, chip: str) -> None:
+        await self._run(["--chip", chip, "--port", self.port, "erase-flash"], what="erasing the flash")
 
-    def write(
+    async def write(
         self, chip: str, baud: int, offset: int, image: str, on_progress: Callable[[float], None]
     ) -> None:
         def on_line(line: str) -> None:
@@ -135,7 +145,7 @@ class Esptool:
             if percent is not None:
                 on_progress(percent)
 
-        self._run(
+        await self._run(
             [
                 "--chip",
                 chip,

@@ -1,5 +1,7 @@
 """esptool runs as a separate process; the chip and the write progress are read from its output."""
 
+import asyncio
+
 import pytest
 
 from openbricks_server.flash.esptool_runner import Esptool, EsptoolError, parse_chip, parse_progress
@@ -10,11 +12,11 @@ def test_chip_probe_and_write_progress_in_both_output_styles(tmp_path, fake_espt
     monkeypatch.setenv("FAKE_ESPTOOL_STYLE", style)
     monkeypatch.setenv("FAKE_ESPTOOL_CHIP", "ESP32")
     tool = Esptool("/dev/ttyUSB7")
-    assert tool.probe_chip() == "esp32"
+    assert asyncio.run(tool.probe_chip()) == "esp32"
     image = tmp_path / "fw.bin"
     image.write_bytes(b"\xe9" * 50_000)
     seen = []
-    tool.write("esp32", 921600, 0x1000, str(image), seen.append)
+    asyncio.run(tool.write("esp32", 921600, 0x1000, str(image), seen.append))
     assert seen[0] == 0.0 and seen[-1] == 100.0
     assert seen == sorted(seen) and len(seen) >= 10
     write = fake_esptool.calls()[-1]
@@ -25,12 +27,12 @@ def test_chip_probe_and_write_progress_in_both_output_styles(tmp_path, fake_espt
 def test_a_failing_esptool_reports_its_own_reason_and_a_hint(fake_esptool, monkeypatch):
     monkeypatch.setenv("FAKE_ESPTOOL_FAIL", "chip-id")
     with pytest.raises(EsptoolError, match="Failed to connect to ESP32-S3.*hold BOOT while pressing RESET"):
-        Esptool("/dev/ttyACM0").probe_chip()
+        asyncio.run(Esptool("/dev/ttyACM0").probe_chip())
 
 
 def test_verbose_echoes_the_command_line(fake_esptool):
     echoed = []
-    Esptool("/dev/ttyACM0", echo=echoed.append).erase("esp32s3")
+    asyncio.run(Esptool("/dev/ttyACM0", echo=echoed.append).erase("esp32s3"))
     assert echoed[0].startswith("$ ") and echoed[0].endswith("--chip esp32s3 --port /dev/ttyACM0 erase-flash")
 
 
