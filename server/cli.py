@@ -409,6 +409,12 @@ def _add_console(sub):
     p.add_argument("--world", help="Simulator world of the virtual hubs (e.g. line_track). Default: empty.")
     p.add_argument("--no-ble", action="store_true", help="Do not scan for or connect to Bluetooth hubs.")
     p.add_argument(
+        "--serial",
+        action="append",
+        metavar="PORT",
+        help="Hold the hub on this USB serial port too (e.g. /dev/ttyUSB0, COM5). Repeatable.",
+    )
+    p.add_argument(
         "--allow-host",
         action="append",
         metavar="NAME",

@@ -20,6 +20,7 @@ def _config(args):
         data_dir=Path(args.data_dir) if args.data_dir else None,
         ble=not args.no_ble,
         allowed_hosts=tuple(args.allow_host or ()),
+        serial_ports=tuple(getattr(args, "serial", None) or ()),
     )
 
 

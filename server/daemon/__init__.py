@@ -8,5 +8,7 @@ Layout (one module or package per job):
 - `auth.py`: tokens, the cookie exchange, Host/Origin checks, roles.
 - `hub_events.py`: the seam through which hub actors report to the store and the event stream.
 - `hubs/`: the backend interface real, serial and virtual hubs implement, one actor per hub, the manager.
-- `routers/`: one FastAPI router per resource (hubs, programs, runs, events, auth, system).
+- `jobs/`: flash and servo jobs (state, steps, progress, result), run beside the hub actors.
+- `routers/`: one FastAPI router per resource (hubs, programs, runs, events, auth, system, jobs, serial,
+  flash, servos).
 """

@@ -32,8 +32,10 @@ from openbricks_server.daemon.events import EventBus
 from openbricks_server.daemon.recorder import INTERRUPTED_BY_CRASH, Recorder
 from openbricks_server.daemon.routers import auth as auth_router
 from openbricks_server.daemon.routers import events as events_router
+from openbricks_server.daemon.routers import flash as flash_router
 from openbricks_server.daemon.routers import hubs as hubs_router
-from openbricks_server.daemon.routers import pages, programs, runs, sim, sim_view, system
+from openbricks_server.daemon.routers import jobs as jobs_router
+from openbricks_server.daemon.routers import pages, programs, runs, serial, sim, sim_view, system
 from openbricks_server.daemon.store import Store, now_ms
 
 
@@ -52,6 +54,8 @@ class DaemonContext:
     auth: Auth
     hubs: Any = None  # the HubManager, once its service has started
     sim: Any = None  # the SimJobs (sim runs), once its service has started
+    jobs: Any = None  # the JobRegistry (flash, servo jobs), once its service has started
+    flash: Any = None  # the FlashJobs
     started_ms: int = field(default_factory=now_ms)
 
 
@@ -98,7 +102,23 @@ async def sim_jobs(ctx: DaemonContext) -> AsyncIterator[None]:
         await ctx.sim.close()
 
 
-SERVICES: list[Service] = [output_writer, hub_manager, sim_jobs]
+@asynccontextmanager
+async def job_runner(ctx: DaemonContext) -> AsyncIterator[None]:
+    """Runs jobs (flash, servo scans); jobs a previous daemon left unfinished are marked failed first.
+    At shutdown, jobs still running are cancelled (an esptool mid-write is killed)."""
+    from openbricks_server.daemon.jobs.flash import FlashJobs
+    from openbricks_server.daemon.jobs.registry import JobRegistry
+
+    ctx.store.jobs.mark_interrupted()
+    ctx.jobs = JobRegistry(ctx.store, ctx.events)
+    ctx.flash = FlashJobs(ctx.jobs, ctx.config.resolved_data_dir, ctx.config.flash_parallel)
+    try:
+        yield
+    finally:
+        await ctx.jobs.close()
+
+
+SERVICES: list[Service] = [output_writer, hub_manager, sim_jobs, job_runner]
 ROUTERS = [
     system.router,
     auth_router.router,
@@ -107,6 +127,9 @@ ROUTERS = [
     events_router.router,
     hubs_router.router,
     sim.router,
+    jobs_router.router,
+    serial.router,
+    flash_router.router,
 ]
 
 

@@ -13,6 +13,7 @@ from pathlib import Path
 DEFAULT_HOST = "127.0.0.1"
 DEFAULT_PORT = 8765
 DEFAULT_VIRTUAL_HUBS = 2
+DEFAULT_FLASH_PARALLEL = 20  # esptool processes at once: each mostly waits on its USB port
 DB_FILENAME = "console.sqlite3"
 # Host header names that always reach a loopback bind; anything else is a DNS-rebinding attempt.
 LOOPBACK_NAMES = frozenset({"localhost", "127.0.0.1", "::1"})
@@ -29,6 +30,8 @@ class DaemonConfig:
     allowed_hosts: tuple[str, ...] = ()  # extra Host header names accepted (for a non-loopback bind)
     ring_size: int = 20_000  # events kept in memory for reconnecting clients
     client_queue: int = 2_000  # events buffered per WebSocket client before it is resynced from the store
+    serial_ports: tuple[str, ...] = ()  # USB-serial hubs to hold (--serial PORT), connected at start
+    flash_parallel: int = DEFAULT_FLASH_PARALLEL  # flash jobs run at once; more wait their turn
     flush_interval_s: float = 0.02  # output lines reach the database this long after they arrive (< 50 ms)
 
     @property

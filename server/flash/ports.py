@@ -25,12 +25,18 @@ class SerialPort:
     device: str
     vid: int | None
     description: str
+    pid: int | None = None
+
+    @property
+    def bridge(self) -> str | None:
+        """What puts an ESP32 board on this port (Espressif USB, CP210x ...), if it is such a chip."""
+        return ESP_USB_VENDORS.get(self.vid) if self.vid is not None else None
 
 
 def connected_ports() -> list[SerialPort]:
     from serial.tools import list_ports
 
-    return [SerialPort(p.device, p.vid, p.description or "") for p in list_ports.comports()]
+    return [SerialPort(p.device, p.vid, p.description or "", p.pid) for p in list_ports.comports()]
 
 
 def pick_port(

@@ -3,6 +3,7 @@
 States (every change reported through `HubEvents.hub_changed`):
 
     offline -> connecting -> idle <-> busy / running -> (dropped) -> connecting -> ...
+    any state but busy / running -> flashing (a flash job holds the hub's USB port) -> offline -> ...
 
 An operation (run, upload, log list/read, identify, the automatic log pull) claims the hub; a second
 caller is refused at once with `HubBusyError` naming the holder (operation, who, since when), never
@@ -204,6 +205,7 @@ class HubActor:
         self._pull_wanted = False
         self._connect_waiters: list[asyncio.Future] = []
         self._wake = asyncio.Event()
+        self._flashing = False
 
     # -- lifecycle ----------------------------------------------------------------------------------
 
@@ -260,6 +262,8 @@ class HubActor:
         """Connect (and keep reconnecting after drops) until `disconnect()`; returns once connected."""
         if self.connected and self.state.status in ("idle", "busy", "running"):
             return self.state
+        if self._flashing:
+            raise self._busy_error()
         waiter = asyncio.get_running_loop().create_future()
         self._connect_waiters.append(waiter)
         self._want.set()
@@ -288,6 +292,58 @@ class HubActor:
                     await done
         return self.state
 
+    @contextlib.asynccontextmanager
+    async def handed_over(self, operation: str, who: str):
+        """The hub's port for someone else (a flash job) for the block: the link is closed and not
+        reopened, the hub shows `flashing` and every operation is refused naming the holder. Afterwards
+        the hub reconnects if it was meant to be connected."""
+        if self._holder is not None:
+            raise self._busy_error()
+        wanted = self._want.is_set()
+        self._flashing = True
+        self._set_holder(Holder(operation, who, now_ms()))
+        self._want.clear()
+        self._wake.set()
+        try:
+            await self._let_go()
+            self._set_status("flashing")
+            yield
+        finally:
+            self._flashing = False
+            self._drop_queued_disconnects()
+            self._set_holder(None)
+            self._set_status("offline")
+            if wanted and not self._closing:
+                self._want.set()
+                self._wake.set()
+
+    async def _let_go(self) -> None:
+        """Until the supervisor has closed the link (asking it to, if it is serving)."""
+        loop = asyncio.get_running_loop()
+        deadline = loop.time() + HAND_BACK_TIMEOUT_S + ENTER_TIMEOUT_S
+        asked = False
+        while self._link is not None:
+            if not asked and self.connected:
+                self._jobs.put_nowait(_Job("busy", _DISCONNECT_WORK, loop.create_future()))
+                asked = True
+            if loop.time() > deadline:
+                raise HubLinkError(
+                    f"{self.name} did not let go of its port in time",
+                    "stop what it is doing (POST /api/hubs/{hub}/stop) and retry",
+                )
+            await asyncio.sleep(0.05)
+
+    def _drop_queued_disconnects(self) -> None:
+        kept = []
+        while not self._jobs.empty():
+            job = self._jobs.get_nowait()
+            if isinstance(job, _Job) and job.work is _DISCONNECT_WORK:
+                _settle(job.future, None, None)
+            else:
+                kept.append(job)
+        for job in kept:
+            self._jobs.put_nowait(job)
+
     # -- state ----------------------------------------------------------------------------------------
 
     def _report(self) -> None:
@@ -298,6 +354,9 @@ class HubActor:
         if self.state.status != status:
             self.state.status = status  # type: ignore[assignment]
             self._report()
+
+    def _unlinked_status(self) -> str:
+        return "flashing" if self._flashing else "offline"
 
     def _set_holder(self, holder: Holder | None) -> None:
         self._holder = holder
@@ -347,7 +406,7 @@ class HubActor:
         attempt = 0
         while not self._closing:
             if not self._want.is_set():
-                self._set_status("offline")
+                self._set_status(self._unlinked_status())
                 self._wake.clear()
                 await self._wake.wait()
                 continue
@@ -455,7 +514,7 @@ class HubActor:
             job = job_get.result()
             if job is _DISCONNECT or (isinstance(job, _Job) and job.work is _DISCONNECT_WORK):
                 await self._close_link()
-                self._set_status("offline")
+                self._set_status(self._unlinked_status())
                 if isinstance(job, _Job) and not job.future.done():
                     job.future.set_result(None)
                 return

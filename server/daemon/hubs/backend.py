@@ -31,6 +31,11 @@ def hub_id(kind: HubKind, address: str) -> str:
     return f"{kind}:{address}"
 
 
+def port_slug(port: str) -> str:
+    """A serial port as one URL path segment: /dev/ttyUSB0 -> ttyUSB0, /dev/pts/3 -> pts-3, COM5 -> COM5."""
+    return port.removeprefix("/dev/").strip("/").replace("/", "-").replace("\\", "-") or port
+
+
 class HubBackend(ABC):
     kind: HubKind
 
@@ -41,6 +46,12 @@ class HubBackend(ABC):
     @property
     def hub_id(self) -> str:
         return hub_id(self.kind, self.address)
+
+    @property
+    def serial_port(self) -> str | None:
+        """The serial port (or pty) the hub's link goes through, if any: a flash job on that port must
+        take the hub's link away first."""
+        return None
 
     @abstractmethod
     def make_link(self) -> Link:
@@ -58,6 +69,14 @@ class SerialBackend(HubBackend):
     def __init__(self, name: str, port: str):
         super().__init__(name, port)
         self.port = port
+
+    @property
+    def hub_id(self) -> str:
+        return hub_id(self.kind, port_slug(self.port))  # the port's path would not fit in a URL segment
+
+    @property
+    def serial_port(self) -> str | None:
+        return self.port
 
     def make_link(self) -> Link:
         from openbricks_server.link.serial_link import SerialLink
@@ -99,6 +118,10 @@ class VirtualBackend(HubBackend):
         if process is not None:
             # Whatever the process still prints must be read, or a full pipe would stall the hub.
             self._drains = [asyncio.create_task(_drain(s)) for s in (process.stdout, process.stderr) if s]
+
+    @property
+    def serial_port(self) -> str | None:
+        return self.pty
 
     def make_link(self) -> Link:
         from openbricks_server.link.serial_link import SerialLink

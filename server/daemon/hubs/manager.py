@@ -26,6 +26,7 @@ from openbricks_server.daemon.hubs.backend import (
     SerialBackend,
     VirtualBackend,
     hub_id,
+    port_slug,
     start_virtual_hub,
 )
 from openbricks_server.daemon.hubs.errors import HubNotFoundError
@@ -71,7 +72,7 @@ class HubManager:
         if count:
             await self._start_virtual_hubs(count)
         for port in _option(self.config, "serial_ports", ()) or ():
-            self.add(SerialBackend(Path(port).name, port), auto_connect=True)
+            self.add(SerialBackend(port_slug(port), port), auto_connect=True)
         if not _option(self.config, "ble", True):
             self.ble_status = "off (--no-ble)"
         else:

@@ -1,7 +1,7 @@
 """The console's database: one SQLite file (WAL) under the data dir, one module per kind of record.
 
 `Store(path)` opens (and migrates) it; its attributes are the tables' APIs: `hubs`, `programs`, `runs`,
-`events`, `tokens`, `audit`, `sim_runs`. Safe to call from the event loop and from worker threads.
+`events`, `tokens`, `audit`, `sim_runs`, `jobs`. Safe to call from the event loop and from worker threads.
 """
 
 from __future__ import annotations
@@ -12,6 +12,7 @@ from openbricks_server.daemon.store.audit import Audit
 from openbricks_server.daemon.store.db import Database, StoreError, now_ms
 from openbricks_server.daemon.store.events import StoredEvents
 from openbricks_server.daemon.store.hubs import Hubs
+from openbricks_server.daemon.store.jobs import Jobs
 from openbricks_server.daemon.store.programs import Programs, sha256_text
 from openbricks_server.daemon.store.runs import RunQuery, Runs
 from openbricks_server.daemon.store.sim_runs import SimRuns
@@ -30,6 +31,7 @@ class Store:
         self.tokens = Tokens(self.db)
         self.audit = Audit(self.db)
         self.sim_runs = SimRuns(self.db)
+        self.jobs = Jobs(self.db)
 
     @property
     def path(self) -> Path:

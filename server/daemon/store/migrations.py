@@ -147,4 +147,25 @@ MIGRATIONS: list[str] = [
         recording TEXT
     );
     """,
+    # 3: jobs (flash, servo scan / re-ID; sim runs and sweeps may follow): one row per job, kept as history.
+    """
+    CREATE TABLE jobs (
+        job_id TEXT PRIMARY KEY,
+        kind TEXT NOT NULL,
+        label TEXT NOT NULL,
+        batch TEXT,
+        who TEXT,
+        state TEXT NOT NULL,
+        progress REAL,
+        message TEXT,
+        params TEXT NOT NULL DEFAULT '{}',
+        result TEXT,
+        steps TEXT NOT NULL DEFAULT '[]',
+        created_ms INTEGER NOT NULL,
+        started_ms INTEGER,
+        ended_ms INTEGER
+    );
+    CREATE INDEX jobs_by_kind ON jobs (kind, created_ms);
+    CREATE INDEX jobs_by_batch ON jobs (batch) WHERE batch IS NOT NULL;
+    """,
 ]

@@ -21,6 +21,7 @@ from websockets.sync.client import connect
 from openbricks_server.daemon.app import SERVICES, DaemonContext, create_app
 from openbricks_server.daemon.config import DaemonConfig
 from openbricks_server.daemon.serve import bind, uvicorn_config
+from tests.server.flash.conftest import fake_esptool  # noqa: F401 - flash jobs run the fake esptool
 
 START_TIMEOUT_S = 20
 

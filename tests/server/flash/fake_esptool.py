@@ -2,12 +2,15 @@
 
 Environment: FAKE_ESPTOOL_LOG (a file that gets one JSON argv list per call), FAKE_ESPTOOL_CHIP
 ("ESP32-S3" or "ESP32"), FAKE_ESPTOOL_STYLE ("v5": progress bars, "v4": "(NN %)" lines ending in \\r),
-FAKE_ESPTOOL_FAIL (an esptool command name that fails like a board that won't connect).
+FAKE_ESPTOOL_FAIL (an esptool command name that fails like a board that won't connect),
+FAKE_ESPTOOL_FAIL_PORT (a port where every command fails so), FAKE_ESPTOOL_WRITE_S (how long a write
+takes, spread over its progress lines; a real one takes seconds).
 """
 
 import json
 import os
 import sys
+import time
 
 
 def main(argv):
@@ -18,7 +21,8 @@ def main(argv):
     command = next(a for a in argv if not a.startswith("-") and a not in _option_values(argv))
     print("esptool v5.6.0")
     print("Connecting....")
-    if os.environ.get("FAKE_ESPTOOL_FAIL") == command:
+    port = argv[argv.index("--port") + 1] if "--port" in argv else None
+    if os.environ.get("FAKE_ESPTOOL_FAIL") == command or os.environ.get("FAKE_ESPTOOL_FAIL_PORT") == port:
         print("A fatal error occurred: Failed to connect to ESP32-S3: No serial data received.")
         return 2
     if style == "v5":
@@ -29,7 +33,11 @@ def main(argv):
     if command == "write-flash":
         address = int(argv[-2], 16)
         size = os.path.getsize(argv[-1])
+        pause = float(os.environ.get("FAKE_ESPTOOL_WRITE_S", "0")) / 10
         for step in range(0, 11):
+            if step:
+                sys.stdout.flush()
+                time.sleep(pause)
             done = size * step // 10
             if style == "v5":
                 bar = "=" * step

@@ -1,10 +1,14 @@
 """What the daemon says about itself."""
 
 from openbricks import __version__
+from openbricks_server.daemon.store.migrations import MIGRATIONS
 
 
 def test_version_health_and_data_dir(daemon, viewer):
-    assert viewer.get("/api/system/version").json() == {"version": __version__, "schema_version": 1}
+    assert viewer.get("/api/system/version").json() == {
+        "version": __version__,
+        "schema_version": len(MIGRATIONS),
+    }
     health = viewer.get("/api/system/health").json()
     assert health["ok"] and health["boot"] == daemon.ctx.events.boot_id
     where = viewer.get("/api/system/data-dir").json()
