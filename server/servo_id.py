@@ -1,6 +1,9 @@
-"""Scanning a serial servo bus and re-IDing a servo through a USB half-duplex adapter.
+"""Scanning a serial servo bus and re-IDing a servo, through a USB half-duplex adapter or through a hub:
+the one implementation behind `openbricks servo-id` and the console's servo jobs, with their messages.
 
-The same rules as the hub's `servo_set_id` (openbricks.host_calls), which serves `servo-id -n`:
+Over USB the host runs the rules itself (`UsbServoBus`, `reid`); through a hub, the hub's own
+`servo_scan` / `servo_set_id` host calls (openbricks.host_calls) run them on the robot's bus, with the
+same rules:
 - the tool never guesses: with more than one servo answering, the caller names `old_id`;
 - a new id already in use is refused (two servos on one id answer on top of each other);
 - the write is checked by reading the id register back from the new id, and by the old id falling
@@ -111,10 +114,10 @@ class UsbServoBus:
         return [i for i in range(FIRST_ID, LAST_ID + 1) if self.ping(i) and self.ping(i)]
 
     def where(self) -> str:
-        return f"the bus on {self.port}"
+        return usb_where(self.port)
 
 
-def choose_old_id(ids: list[int], old_id: int | None, where: str) -> int:
+def choose_old_id(ids: list[int], old_id: int | None, where: str, option: str = "--old-id") -> int:
     """The servo to re-ID by the --old-id rule: the lone servo on the bus, or the one named; never guessed."""
     listed = ", ".join(str(i) for i in ids)
     if not ids:
@@ -122,23 +125,23 @@ def choose_old_id(ids: list[int], old_id: int | None, where: str) -> int:
     if old_id is None:
         if len(ids) > 1:
             raise ServoIdError(
-                f"{len(ids)} servos answer (ids {listed}): pass --old-id to say which one to re-ID; it is "
+                f"{len(ids)} servos answer (ids {listed}): pass {option} to say which one to re-ID; it is "
                 "never guessed"
             )
         return ids[0]
     if old_id not in ids:
-        raise ServoIdError(f"no servo answers at --old-id {old_id}; the bus has ids {listed}")
+        raise ServoIdError(f"no servo answers at {option} {old_id}; the bus has ids {listed}")
     return old_id
 
 
-def reid(bus: UsbServoBus, new_id: int, old_id: int | None) -> Reid:
+def reid(bus: UsbServoBus, new_id: int, old_id: int | None, option: str = "--old-id") -> Reid:
     """Give one servo `new_id`, verified by read-back; see the module rules."""
     check_id("new id", new_id)
-    check_id("--old-id", old_id)
+    check_id(option, old_id)
     scs = bus.scs
     ids = bus.scan()
     listed = ", ".join(str(i) for i in ids)
-    old_id = choose_old_id(ids, old_id, bus.where())
+    old_id = choose_old_id(ids, old_id, bus.where(), option)
     if new_id == old_id:
         return Reid(old_id, new_id, ids, False)
     if new_id in ids:
@@ -162,3 +165,62 @@ def reid(bus: UsbServoBus, new_id: int, old_id: int | None) -> Reid:
             "servo at a time and retry"
         )
     return Reid(old_id, new_id, after, True)
+
+
+# -- reports and the two ways to reach a bus, shared by the CLI and the console ---------------------------
+
+HUB_CALL_TIMEOUT_S = 60.0  # a full scan through the hub pings 254 ids
+
+
+def scan_report(ids: list[int], where: str) -> str:
+    if ids:
+        return f"servo ids on {where}: {', '.join(str(i) for i in ids)}"
+    return f"no servo answers on {where}"
+
+
+def reid_report(done: Reid) -> str:
+    if not done.changed:
+        return f"servo {done.old_id} already has id {done.new_id}; nothing to change"
+    return (
+        f"servo {done.old_id} is now id {done.new_id} (read back from the servo); ids on the bus: "
+        f"{', '.join(str(i) for i in done.ids_after)}"
+    )
+
+
+def usb_where(port: str) -> str:
+    return f"the bus on {port}"
+
+
+def hub_where(hub_name: str) -> str:
+    return f"{hub_name}'s servo bus"
+
+
+def scan_usb(port: str, baudrate: int, timeout_s: float) -> list[int]:
+    """The ids answering on a USB adapter's bus (blocking: a thread's work in the console)."""
+    with UsbServoBus(port, baudrate, timeout_s) as bus:
+        return bus.scan()
+
+
+def reid_usb(
+    port: str, baudrate: int, timeout_s: float, new_id: int, old_id: int | None, option: str = "--old-id"
+) -> Reid:
+    with UsbServoBus(port, baudrate, timeout_s) as bus:
+        return reid(bus, new_id, old_id, option)
+
+
+async def scan_through_hub(call, bus: dict) -> list[int]:
+    """`call(name, timeout_s=..., **args)` makes a host call on the hub (a HubSession's or an actor's);
+    `bus` is the hub's servo UART: {"tx", "rx", "baud"}."""
+    return list((await call("servo_scan", timeout_s=HUB_CALL_TIMEOUT_S, **bus))["ids"])
+
+
+async def reid_through_hub(
+    call, bus: dict, new_id: int, old_id: int | None, where: str, option: str = "--old-id"
+) -> Reid:
+    check_id("new id", new_id)
+    check_id(option, old_id)
+    if old_id is None:
+        # The --old-id rule in the host's own words; the hub then re-IDs exactly the servo named.
+        old_id = choose_old_id(await scan_through_hub(call, bus), None, where, option)
+    done = await call("servo_set_id", timeout_s=HUB_CALL_TIMEOUT_S, new_id=new_id, old_id=old_id, **bus)
+    return Reid(int(done["old_id"]), int(done["new_id"]), list(done["ids"]), bool(done["changed"]))

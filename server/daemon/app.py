@@ -35,7 +35,7 @@ from openbricks_server.daemon.routers import events as events_router
 from openbricks_server.daemon.routers import flash as flash_router
 from openbricks_server.daemon.routers import hubs as hubs_router
 from openbricks_server.daemon.routers import jobs as jobs_router
-from openbricks_server.daemon.routers import pages, programs, runs, serial, sim, sim_view, system
+from openbricks_server.daemon.routers import pages, programs, runs, serial, servos, sim, sim_view, system
 from openbricks_server.daemon.store import Store, now_ms
 
 
@@ -130,6 +130,7 @@ ROUTERS = [
     jobs_router.router,
     serial.router,
     flash_router.router,
+    servos.router,
 ]
 
 

@@ -550,6 +550,8 @@ class HubActor:
             from openbricks_server.hub_session import hub_exception_message
 
             error = HubRefusedError(hub_exception_message(self.name, exc))
+        except CliError as exc:  # a rule the shared host code applies (a servo re-ID's old id): its words
+            error = exc
         except LinkError as exc:
             _settle(job.future, None, self._link_error(exc))
             self._release()
@@ -735,6 +737,15 @@ class HubActor:
 
         reply = await (await self._submit("identify", who, work))
         return {"identify_ms": reply["identify_ms"]}
+
+    async def host_calls(self, operation: str, who: str, work: Callable[[Callable], Awaitable[Any]]) -> Any:
+        """`work(call)` as one operation (`call(name, timeout_s=..., **args)` makes a host call on the
+        hub): a servo scan or re-ID, the same code the CLI runs with its own session's `call`."""
+
+        async def job():
+            return await work(self._repl.call)
+
+        return await (await self._submit(operation, who, job))
 
     async def list_logs(self, *, who: str) -> list[dict]:
         async def work():

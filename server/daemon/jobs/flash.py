@@ -19,7 +19,6 @@ from pathlib import Path
 
 from ulid import ULID
 
-from openbricks_server.daemon.hubs.errors import HubOperationError
 from openbricks_server.daemon.jobs.registry import Job, JobFailed, JobRegistry
 from openbricks_server.flash.flasher import FlashRequest, flash_hub, older_version_refusal
 from openbricks_server.flash.image import FirmwareImage, inspect_bytes, inspect_image
@@ -117,14 +116,11 @@ class FlashJobs:
             report = _JobReport(self.jobs, job)
             request = FlashRequest(port=target.port, name=target.name, image=image)
             confirm = (lambda _question: None) if allow_downgrade else older_version_refusal(DOWNGRADE_HINT)
-            try:
-                if target.actor is None:
+            if target.actor is None:
+                result = await flash_hub(request, report, confirm, echo=report.detail)
+            else:
+                async with target.actor.handed_over("flash", job.who):
                     result = await flash_hub(request, report, confirm, echo=report.detail)
-                else:
-                    async with target.actor.handed_over("flash", job.who):
-                        result = await flash_hub(request, report, confirm, echo=report.detail)
-                        target.actor.rename(result.hub_name)
-            except HubOperationError as exc:
-                raise JobFailed(f"{exc.message}; {exc.hint}" if exc.hint else exc.message) from None
+                    target.actor.rename(result.hub_name)
             self.chips[target.port] = result.chip
             return asdict(result)

@@ -3,8 +3,10 @@ steps, progress and a result; every change is stored and published as a `job` ev
 `job_progress`, only when the whole percent changes) so any client can follow it live or look it up later.
 
 A job's work is a coroutine given its `Job`; what it returns is the result. A `CliError` (the message a
-user reads, shared with the CLI) or a `JobFailed` fails the job with that message; anything else fails it
-as an unexpected error (logged). At shutdown, jobs still running are cancelled and marked so.
+user reads, shared with the CLI), a hub's refusal or a `JobFailed` fails the job with that message;
+anything else fails it as an unexpected error (logged). `start` runs a job in the background (flash:
+the request answers at once); `run` runs it to its end in the caller (a servo scan answers with its
+result). At shutdown, jobs still running are cancelled and marked so.
 """
 
 from __future__ import annotations
@@ -19,6 +21,7 @@ from typing import Literal
 from ulid import ULID
 
 from openbricks_server.daemon.events import EventBus
+from openbricks_server.daemon.hubs.errors import HubOperationError
 from openbricks_server.daemon.store import Store, now_ms
 from openbricks_server.errors import CliError
 
@@ -78,20 +81,32 @@ class JobRegistry:
 
     async def _run(self, job: Job, work: Callable[[Job], Awaitable[dict]]) -> None:
         try:
+            await self.run(job, work)
+        except Exception:  # noqa: BLE001 - recorded on the job; nobody awaits a started job's task
+            pass
+        finally:
+            self._tasks.pop(job.job_id, None)
+
+    async def run(self, job: Job, work: Callable[[Job], Awaitable[dict]]) -> dict:
+        """Run `work(job)` to its end here, recording how it ended; its exception is raised again."""
+        try:
             result = await work(job)
         except asyncio.CancelledError:
             self._end(job, "cancelled", "cancelled: the console was shut down while it ran")
             raise
         except (CliError, JobFailed) as exc:
             self._end(job, "failed", str(exc))
-        except Exception as exc:  # noqa: BLE001 - a bug fails its job, never the daemon
+            raise
+        except HubOperationError as exc:  # the hub refused (busy, offline ...) or its link failed
+            self._end(job, "failed", f"{exc.message}; {exc.hint}" if exc.hint else exc.message)
+            raise
+        except Exception as exc:
             log.exception("job %s (%s %s) failed unexpectedly", job.job_id, job.kind, job.label)
             self._end(job, "failed", f"unexpected error ({type(exc).__name__}: {exc}); see the console's log")
-        else:
-            job.result = result
-            self._end(job, "done", None)
-        finally:
-            self._tasks.pop(job.job_id, None)
+            raise
+        job.result = result
+        self._end(job, "done", None)
+        return result
 
     def running(self, job: Job) -> None:
         job.state = "running"
