@@ -32,6 +32,7 @@ exclude_patterns = ["_build", "screenshots/README.md"]
 # A page outside every toctree, an unknown reference or a missing listing is a build error under -W.
 suppress_warnings: list[str] = []
 
+highlight_language = "text"  # an unlabelled block is shown as typed; Python listings say so
 html_theme = "furo"
 html_title = f"openbricks {release}"
 html_copy_source = False

@@ -18,7 +18,11 @@ ROOT = Path(__file__).resolve().parents[2]
 DOCS = ROOT / "docs"
 EXAMPLES = ROOT / "examples"
 # The tests that run example programs in the simulator, and the host scripts against a real console.
-LISTING_TESTS = [ROOT / "tests/sim/test_examples.py", ROOT / "tests/sim/test_manual_listings.py"]
+LISTING_TESTS = [
+    ROOT / "tests/sim/test_examples.py",
+    ROOT / "tests/sim/test_manual_listings.py",
+    ROOT / "tests/web/test_console_script_example.py",
+]
 
 
 @pytest.fixture(scope="module")
@@ -121,5 +125,5 @@ def test_program_code_in_the_docs_is_never_inline():
 
 def test_every_page_is_a_topic_of_openbricks_docs(site):
     names = topics(site)
-    for stem in ("index", "install", "console", "simulator", "api/drivebase", "cli-reference"):
+    for stem in ("index", "install", "first-robot", "console", "simulator", "api/drivebase", "cli-reference"):
         assert stem in names, stem

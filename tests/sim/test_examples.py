@@ -212,3 +212,20 @@ def test_the_seed_sweep_script_tabulates_one_row_per_seed(tmp_path):
     rows = re.findall(r"^\s+(\d+)  (\w+)\s", done.stdout, flags=re.M)
     assert rows == [("3", "finished"), ("4", "finished")]
     assert "finished: 2 of 2 (100 %)" in done.stdout
+
+
+def test_motor_basics_turns_the_wheel_by_the_angles_it_prints(tmp_path):
+    result = run_example(EXAMPLES / "motor_basics.py", tmp_path)
+    output = result["output"]
+    assert abs(int(re.search(r"after run_angle: (-?\d+) deg", output).group(1)) - 720) <= 5
+    assert abs(int(re.search(r"turning at about (-?\d+) deg/s", output).group(1)) - 180) <= 15
+    # One more second at 180 deg/s, then the brake's ramp: about 900 degrees in all.
+    assert 850 < int(re.search(r"stopped at (-?\d+) deg", output).group(1)) < 960
+
+
+def test_telemetry_example_plots_a_rising_distance_and_reaches_its_600_mm(tmp_path):
+    result = run_example(EXAMPLES / "telemetry_plot.py", tmp_path)
+    distances = [float(d) for d in re.findall(r"^plot: distance_mm = ([-0-9.]+)$", result["output"], re.M)]
+    assert len(distances) > 10 and distances == sorted(distances)
+    assert re.search(r"^plot: left_dps = [-0-9.]+$", result["output"], re.M)
+    assert abs(result["pose"]["x_mm"] - 600.0) < 5.0

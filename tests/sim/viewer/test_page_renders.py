@@ -15,6 +15,7 @@ import shutil
 import subprocess
 import time
 import urllib.request
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -28,6 +29,7 @@ pytestmark = pytest.mark.e2e
 
 WIDTH, HEIGHT = 1280, 800
 RENDER_TIMEOUT_S = 60.0
+ARTIFACTS = Path(__file__).resolve().parents[3] / "build" / "artifacts" / "sim"
 CHROMIUM_FLAGS = [
     "--headless",
     "--no-sandbox",
@@ -144,7 +146,9 @@ def test_the_zones_mat_renders_with_its_colours_in_place(tmp_path):
                 browser.close()
     finally:
         sim.close()
-    Image.fromarray(pixels.astype(np.uint8)).save(tmp_path / "page.png")  # for a person to look at
+    # Kept for a person to look at, and for the simulator guide's picture of the 3D view (docs/conf.py).
+    ARTIFACTS.mkdir(parents=True, exist_ok=True)
+    Image.fromarray(pixels.astype(np.uint8)).save(ARTIFACTS / "viewer-3d.png")
     assert pixels.shape[:2] == (HEIGHT, WIDTH)
     for name, mask in seen.items():
         assert mask.sum() > 800, f"the {name} zone is missing from the page ({mask.sum()} pixels)"
