@@ -22,6 +22,7 @@ LISTING_TESTS = [
     ROOT / "tests/sim/test_examples.py",
     ROOT / "tests/sim/test_manual_listings.py",
     ROOT / "tests/web/test_console_script_example.py",
+    ROOT / "tests/server/daemon/routers/test_flash_script_example.py",
 ]
 
 
