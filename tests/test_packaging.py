@@ -1,5 +1,6 @@
 """The installed distribution: import names and the console script."""
 
+import os
 import subprocess
 import sys
 import zipfile
@@ -63,3 +64,25 @@ def test_the_wheel_carries_everything_an_installed_openbricks_reads(tmp_path):
     assert any(n.startswith(console + "assets/") and n.endswith(".js") for n in names), "the console's script"
     for extension in ("openbricks_native", "openbricks_mjcontrol", "openbricks_pycost"):
         assert any(n.startswith(extension) and n.endswith(".so") for n in names), extension
+
+    # `openbricks docs` from those files alone, as a wheel install runs it: the page it opens is the
+    # wheel's, a file:// page that loads nothing from the network (tests/docs checks every page).
+    installed = tmp_path / "site-packages"
+    zipfile.ZipFile(wheel).extractall(installed)
+    record = tmp_path / "opened.txt"
+    browser = tmp_path / "browser"
+    browser.write_text(f'#!/bin/sh\necho "$1" >> "{record}"\n')
+    browser.chmod(0o755)
+    env = {**os.environ, "PYTHONPATH": str(installed), "BROWSER": f"{browser} %s"}
+    env.pop("OPENBRICKS_DOCS_DIR", None)
+    done = subprocess.run(
+        [sys.executable, "-m", "openbricks_server.cli", "docs", "drivebase"],
+        capture_output=True,
+        text=True,
+        env=env,
+        cwd=tmp_path,
+        timeout=60,
+    )
+    assert done.returncode == 0, done.stderr
+    opened = Path(record.read_text().split()[0].removeprefix("file://"))
+    assert opened == installed / site / "api" / "drivebase.html" and opened.is_file()
