@@ -40,6 +40,8 @@ html_show_sourcelink = False
 html_static_path: list[str] = []
 html_last_updated_fmt = None
 
+# The runtime's docstrings quote names in single backticks, as Markdown does: show them as code.
+default_role = "literal"
 autodoc_member_order = "bysource"
 autodoc_default_options = {"members": True, "show-inheritance": True}
 autoclass_content = "both"
