@@ -4,6 +4,8 @@
     openbricks sim run SCRIPT [--world W] [--x X] [--y Y] [--yaw DEG] [--viewer] [--no-shim] [--seed N]
                                [--chassis C] [--speed F] [--duration S] [--json] [--hub-dir DIR]
                                [--range-finder PART] [--bare-0x29 PART]
+    openbricks sim sweep SCRIPT --seeds 1-50 [--workers N | --dask tcp://host:8786] [--json] [--csv FILE]
+                               [the run's options, as for sim run]
 
 Positions follow the manual's simulator chapter: metres on the mat, yaw in degrees counter-clockwise
 from +x (MuJoCo's convention); inside, the simulator works in millimetres with Pybricks' clockwise
@@ -102,7 +104,48 @@ def build_parser() -> argparse.ArgumentParser:
         help="Print one JSON object (exit reason, final pose, score, simulated and wall time), not text.",
     )
     add_run_arguments(run)
+
+    sweep = sub.add_parser(
+        "sweep",
+        help="run a hub program over many seeds and summarise the scores",
+        description=(
+            "Run SCRIPT once per seed, exactly as `sim run` would (each in a contained process of its own), "
+            "on a local pool or a Dask cluster, and print each seed's score, exit reason, simulated time and "
+            "final pose with a summary: mean, median and lowest score, and the share of runs that ran to "
+            "their end."
+        ),
+    )
+    sweep.add_argument("script", metavar="SCRIPT", help="The program file, as you would run it on a hub.")
+    sweep.add_argument(
+        "--seeds", required=True, help="Seeds to run: a range 1-50, one seed 3, or a list 1,4,9 (mixes too)."
+    )
+    add_place_arguments(sweep)
+    sweep.add_argument(
+        "--workers",
+        type=_whole_positive,
+        help="Seeds run at a time on this computer. Default: one per CPU core.",
+    )
+    sweep.add_argument(
+        "--dask",
+        metavar="ADDRESS",
+        help="Run the seeds on a Dask cluster instead: its scheduler's address, e.g. tcp://host:8786.",
+    )
+    sweep.add_argument(
+        "--json", action="store_true", help="Print one JSON object: a row per seed and the summary."
+    )
+    sweep.add_argument("--csv", metavar="FILE", help="Also write a row per seed to FILE as CSV.")
+    add_run_arguments(sweep, single_run=False)
     return parser
+
+
+def _whole_positive(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        value = 0
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"{text!r}: give a whole number from 1 up")
+    return value
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -115,6 +158,8 @@ def main(argv: list[str] | None = None) -> int:
         _require_mujoco()
         if args.command == "preview":
             return _preview(args)
+        if args.command == "sweep":
+            return _sweep(args)
         return _run(args)
     except SimCliError as exc:
         print(f"openbricks sim {args.command}: error: {exc}", file=sys.stderr)
@@ -192,10 +237,11 @@ def _preview(args) -> int:
     return EXIT_OK
 
 
-def _run(args) -> int:
+def _program(path: str):
+    """(Path, text) of the program file, refused before any world is built if it is not one."""
     from pathlib import Path
 
-    script = Path(args.script)
+    script = Path(path)
     if script.is_dir():
         raise SimCliError(f"{script} is a folder: give the program's .py file")
     if not script.is_file():
@@ -205,6 +251,11 @@ def _run(args) -> int:
     except UnicodeDecodeError as exc:
         raise SimCliError(f"{script} is not UTF-8 text ({exc.reason} at byte {exc.start})") from None
     _check_syntax(source, script.name)
+    return script, source
+
+
+def _run(args) -> int:
+    script, source = _program(args.script)
     if args.viewer and _viewer_launcher() is None:
         raise SimCliError(VIEWER_UNAVAILABLE)
     world = _world(args.world)
@@ -231,6 +282,25 @@ def _check_syntax(source: str, filename: str) -> None:
         compile(source, filename, "exec", dont_inherit=True)
     except SyntaxError as exc:
         raise SimCliError("".join(traceback.format_exception_only(exc)).rstrip()) from None
+
+
+def _sweep(args) -> int:
+    """Seeds run in contained child processes (sweep.py); this process only waits and reports."""
+    from openbricks_sim.sweep import SweepError, parse_seeds
+    from openbricks_sim.sweep_report import run_sweep
+
+    script, source = _program(args.script)
+    _world(args.world)
+    if args.dask and args.workers:
+        raise SimCliError(
+            "--workers is for the local pool; a Dask cluster runs as many seeds as it has workers"
+        )
+    try:
+        seeds = parse_seeds(args.seeds)
+        job = job_from_args(args, str(script))
+        return run_sweep(job, seeds, source, args)
+    except (SweepError, JobError) as exc:
+        raise SimCliError(str(exc)) from None
 
 
 def _run_contained(args, world, script) -> int:

@@ -41,14 +41,15 @@ CHILD_MAIN = (
 )
 
 
-def run_in_child(job: SimJob, viewer=False, silent=False, quiet=False) -> tuple[SimResult, int]:
+def run_in_child(job: SimJob, viewer=False, silent=False, quiet=False, stop=None) -> tuple[SimResult, int]:
     """Run `job` in `python -m openbricks_sim.run --job JSON --result-fd N`; (its SimResult, exit status).
 
     viewer: serve the 3D view (the child runs until interrupted). By default the program's output
     and the report go to the terminal we share, as a run on the hub would; silent: the child prints
     neither (they are in the result: `sim run --json`); quiet: silent, and whatever else the child
     writes is discarded too (a sweep's hundred children on one terminal).
-    Off the main thread (a sweep's worker) no signal is forwarded: Python handles signals only there.
+    Off the main thread (a sweep's worker) no signal is forwarded: Python handles signals only there;
+    setting `stop` (a threading.Event) stops the program instead, as a Ctrl-C would.
     """
     wall_limit_s = job.wall_limit(watched=viewer)
     cpu_limit_s = job.cpu_limit(watched=viewer)
@@ -95,13 +96,7 @@ def run_in_child(job: SimJob, viewer=False, silent=False, quiet=False) -> tuple[
         chunks = []
         reader = threading.Thread(target=_read_all, args=(read_end, chunks), daemon=True)
         reader.start()
-        deadline = None if not wall_limit_s else wall_limit_s + GRACE_S
-        try:
-            child.wait(timeout=deadline)
-        except subprocess.TimeoutExpired:
-            killed_for_time = True
-            child.kill()
-            child.wait()
+        killed_for_time = _wait(child, None if not wall_limit_s else wall_limit_s + GRACE_S, stop, interrupts)
     finally:
         for signum, handler in previous.items():
             signal.signal(signum, handler)
@@ -117,6 +112,28 @@ def run_in_child(job: SimJob, viewer=False, silent=False, quiet=False) -> tuple[
     if interrupts and result.exit == STOPPED:
         return result, EXIT_STATUS[STOPPED]
     return result, EXIT_STATUS.get(result.exit, 1)
+
+
+def _wait(child, timeout_s, stop, interrupts) -> bool:
+    """Wait for the child; True if it outlived timeout_s and was killed. A set `stop` interrupts it."""
+    deadline = None if timeout_s is None else time.monotonic() + timeout_s
+    while True:
+        slice_s = None if stop is None else 0.2
+        if deadline is not None:
+            left = max(0.0, deadline - time.monotonic())
+            slice_s = left if slice_s is None else min(slice_s, left)
+        try:
+            child.wait(timeout=slice_s)
+            return False
+        except subprocess.TimeoutExpired:
+            pass
+        if deadline is not None and time.monotonic() >= deadline:
+            child.kill()
+            child.wait()
+            return True
+        if stop is not None and stop.is_set() and not interrupts:
+            interrupts.append(signal.SIGINT)
+            child.send_signal(signal.SIGINT)
 
 
 def _read_all(fd, chunks):
