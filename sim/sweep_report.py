@@ -9,6 +9,7 @@ from __future__ import annotations
 import csv
 import json
 import os
+import signal
 import sys
 
 from .sweep import SeedRow, SweepError, summarise, sweep
@@ -35,6 +36,10 @@ def run_sweep(job, seeds, source, args) -> int:
         check_csv_path(args.csv)
     rows: list[SeedRow] = []
     progress = sys.stderr.isatty() and not args.json
+    # A SIGTERM or SIGHUP ends the sweep as Ctrl-C does: the seeds' children run in sessions of
+    # their own, so only the sweep can stop them, and it must get to do so.
+    for signum in (signal.SIGTERM, signal.SIGHUP):
+        signal.signal(signum, _interrupt)
     try:
         for row in sweep(job, seeds, workers=args.workers, dask=args.dask, source=source):
             rows.append(row)
@@ -68,6 +73,10 @@ def check_csv_path(path: str) -> None:
         raise SweepError(f"--csv {path}: the folder {folder} does not exist")
     if not os.access(folder, os.W_OK):
         raise SweepError(f"--csv {path}: the folder {folder} is not writable")
+
+
+def _interrupt(_signum, _frame):
+    raise KeyboardInterrupt
 
 
 def table(rows: list[SeedRow], summary: dict) -> str:

@@ -1,0 +1,102 @@
+"""Seed sweeps: how many seeds a minute the local pool and a Dask cluster get through, and what one
+sim job costs before its program does anything.
+
+- start latency: a SimJob whose program is empty, run the way `sim run` and every seed run it (a
+  contained child process: interpreter start, imports, the world's build, the limits, the result
+  back over a pipe). The median of a few runs, for the empty world and for the WRO table.
+- throughput: the same SEEDS seeds of a short drive across the WRO table (3 s simulated), on the
+  local pool with 2 workers, then on a Dask LocalCluster of 2 worker processes on 127.0.0.1 (its
+  start-up timed apart, as a standing cluster would not pay it per sweep).
+
+Every figure carries the 1-minute load average when it was taken: on a shared machine the load,
+not the engine, is often what moves them.
+"""
+
+from __future__ import annotations
+
+import os
+import statistics
+import tempfile
+import time
+
+from benchmarks import Row
+
+SEEDS = 20
+WORKERS = 2
+LATENCY_RUNS = 5
+
+DRIVE = """\
+import time
+from openbricks.drivers.st3032 import ST3032Motor
+
+left = ST3032Motor(1)
+right = ST3032Motor(2, invert=True)
+left.run_speed(360)
+right.run_speed(330)
+time.sleep_ms(3000)
+left.brake()
+right.brake()
+"""
+
+
+def _load() -> str:
+    return f"load {os.getloadavg()[0]:.1f}"
+
+
+def _start_latency(folder: str, world: str) -> Row:
+    from openbricks_sim.job import SimJob
+    from openbricks_sim.run_process import run_in_child
+
+    program = os.path.join(folder, "empty.py")
+    with open(program, "w") as f:
+        f.write("pass\n")
+    times = []
+    for _ in range(LATENCY_RUNS):
+        started = time.perf_counter()
+        result, _ = run_in_child(SimJob(program, world=world), quiet=True)
+        times.append(time.perf_counter() - started)
+        assert result.exit == "finished", result.error
+    return Row(
+        f"start latency, {world} world",
+        statistics.median(times) * 1000,
+        "ms",
+        f"an empty program in a contained child, median of {LATENCY_RUNS}; {_load()}",
+    )
+
+
+def _seeds_per_minute(case: str, job, **engine) -> Row:
+    from openbricks_sim.sweep import sweep
+
+    load_before = _load()
+    started = time.perf_counter()
+    rows = list(sweep(job, range(1, SEEDS + 1), **engine))
+    took = time.perf_counter() - started
+    assert len(rows) == SEEDS and all(r.result.exit == "finished" for r in rows)
+    return Row(case, SEEDS / took * 60, "seeds/min", f"{SEEDS} seeds in {took:.1f} s; {load_before}")
+
+
+def run() -> list[Row]:
+    from distributed import LocalCluster
+
+    from openbricks_sim.job import SimJob
+
+    rows = []
+    with tempfile.TemporaryDirectory(prefix="bench-sweep-") as folder:
+        rows.append(_start_latency(folder, "empty"))
+        rows.append(_start_latency(folder, "wro"))
+        program = os.path.join(folder, "drive.py")
+        with open(program, "w") as f:
+            f.write(DRIVE)
+        job = SimJob(program, world="wro", limit_ms=10_000)
+        rows.append(_seeds_per_minute(f"local pool, {WORKERS} workers", job, workers=WORKERS))
+        started = time.perf_counter()
+        with LocalCluster(
+            n_workers=WORKERS, threads_per_worker=1, processes=True, host="127.0.0.1", dashboard_address=None
+        ) as cluster:
+            rows.append(Row("Dask LocalCluster start", (time.perf_counter() - started) * 1000, "ms", _load()))
+            rows.append(
+                _seeds_per_minute(
+                    f"Dask LocalCluster, {WORKERS} worker processes", job, dask=cluster.scheduler_address
+                )
+            )
+    return rows
