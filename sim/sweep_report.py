@@ -38,8 +38,7 @@ def run_sweep(job, seeds, source, args) -> int:
     progress = sys.stderr.isatty() and not args.json
     # A SIGTERM or SIGHUP ends the sweep as Ctrl-C does: the seeds' children run in sessions of
     # their own, so only the sweep can stop them, and it must get to do so.
-    for signum in (signal.SIGTERM, signal.SIGHUP):
-        signal.signal(signum, _interrupt)
+    previous = {signum: signal.signal(signum, _interrupt) for signum in (signal.SIGTERM, signal.SIGHUP)}
     try:
         for row in sweep(job, seeds, workers=args.workers, dask=args.dask, source=source):
             rows.append(row)
@@ -48,6 +47,9 @@ def run_sweep(job, seeds, source, args) -> int:
     except KeyboardInterrupt:
         print(f"sweep interrupted after {len(rows)} of {len(seeds)} seeds", file=sys.stderr)
         return EXIT_INTERRUPTED
+    finally:
+        for signum, handler in previous.items():
+            signal.signal(signum, handler)
     rows.sort(key=lambda row: row.seed)
     summary = summarise(rows)
     if args.json:
