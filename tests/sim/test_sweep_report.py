@@ -153,12 +153,12 @@ def test_ctrl_c_or_sigterm_ends_a_sweep_and_stops_every_running_seed(tmp_path, s
         deadline = time.monotonic() + 60
         while len(seeds_running()) < 2 and time.monotonic() < deadline:
             time.sleep(0.2)
-        assert len(seeds_running()) == 2, "two seeds should be running"
+        assert len(seeds_running()) == 2, f"two seeds should be running: {seeds_running()}"
         sweep_cli.send_signal(signum)
         _, err = sweep_cli.communicate(timeout=60)
-        assert sweep_cli.returncode == 130
-        assert "sweep interrupted after 0 of 4 seeds" in err and "Traceback" not in err
-        assert seeds_running() == []
+        assert sweep_cli.returncode == 130, err
+        assert "sweep interrupted after 0 of 4 seeds" in err and "Traceback" not in err, err
+        assert seeds_running() == [], err
     finally:
         sweep_cli.kill()
         for pid in seeds_running():  # a failed test leaves no runs behind
