@@ -211,6 +211,9 @@ ob_serial_bus_error_t ob_serial_bus_adopt(ob_serial_bus_t *bus, int servo_id, bo
     slot->servo_id = id;
     slot->sign = invert ? -1.0f : 1.0f;
     slot->torque_known = true; /* written off above */
+    ob_servo_t *move = &bus->moves[bus->n_slots];
+    ob_servo_config_default(&move->cfg); /* st_move_core's settings; the core starts with a move */
+    move->cfg.counts_per_rev = (float)OB_SERIAL_BUS_COUNTS_PER_REV;
     bool answered = false;
     for (int attempt = 0; attempt < OB_SERIAL_BUS_ATTEMPTS && !answered; attempt++) {
         answered = read_feedback(bus, slot);
@@ -236,6 +239,7 @@ ob_serial_bus_error_t ob_serial_bus_release(ob_serial_bus_t *bus, int index) {
     (void)write_register(bus, slot->servo_id, OB_SCS_REG_MODE, &wheel_mode, 1);
     slot->adopted = false;
     slot->driven = false;
+    slot->move_active = false;
     return OB_SERIAL_BUS_OK;
 }
 
@@ -276,6 +280,58 @@ static void io_write_coast(void *ctx) {
 ob_motor_io_t ob_serial_bus_motor_io(ob_serial_bus_slot_t *slot) {
     ob_motor_io_t io = {io_read_angle, io_write_duty, io_write_coast, slot};
     return io;
+}
+
+/* ---- st_move_core ---- */
+
+static ob_servo_t *move_of(const ob_serial_bus_slot_t *slot) {
+    return &slot->bus->moves[slot - slot->bus->slots];
+}
+
+static ob_servo_t *start_move(ob_serial_bus_slot_t *slot) {
+    ob_servo_t *move = move_of(slot);
+    if (!slot->move_active) {
+        /* A fresh core plans from the shaft's next reading, not from an earlier move's stale clock. */
+        ob_servo_config_t cfg = move->cfg;
+        ob_motor_io_t io = ob_serial_bus_motor_io(slot);
+        ob_servo_init(move, &io, &cfg);
+        slot->move_active = true;
+    }
+    return move;
+}
+
+void ob_serial_bus_move(ob_serial_bus_slot_t *slot, float speed_dps, float angle_deg, ob_then_t then,
+                        float accel_dps2) {
+    ob_servo_t *move = start_move(slot);
+    float accel = accel_dps2 > 0.0f ? accel_dps2 : move->cfg.accel_dps2;
+    float decel = accel_dps2 > 0.0f ? accel_dps2 : move->cfg.decel_dps2;
+    ob_servo_move(move, speed_dps, angle_deg, true, then, accel, decel);
+}
+
+void ob_serial_bus_hold(ob_serial_bus_slot_t *slot) {
+    ob_servo_hold(start_move(slot));
+}
+
+void ob_serial_bus_end_move(ob_serial_bus_slot_t *slot) {
+    slot->move_active = false;
+}
+
+bool ob_serial_bus_arrived(const ob_serial_bus_slot_t *slot) {
+    return !slot->move_active || ob_servo_is_done(move_of(slot));
+}
+
+bool ob_serial_bus_move_lost_feedback(const ob_serial_bus_slot_t *slot) {
+    return slot->move_active && move_of(slot)->feedback_lost;
+}
+
+bool ob_serial_bus_stalled(const ob_serial_bus_slot_t *slot, float load_pct, float speed_dps) {
+    if (!ob_serial_bus_answering(slot)) {
+        return false;
+    }
+    if (slot->move_active && ob_servo_is_stalled(move_of(slot))) {
+        return true;
+    }
+    return fabsf(slot->load_pct) >= load_pct && fabsf(slot->speed_dps) <= speed_dps;
 }
 
 /* ---- The tick ---- */
@@ -320,11 +376,18 @@ static void send_commands(ob_serial_bus_t *bus) {
 }
 
 void ob_serial_bus_tick(void *ctx, uint32_t now_ms) {
-    (void)now_ms; /* the wire's own clock measures the bus work */
     ob_serial_bus_t *bus = ctx;
     if (bus->n_slots == 0) {
         return;
     }
+    /* The slots' own moves and holds first, on the scheduler's clock: their duties go out below. */
+    for (int i = 0; i < bus->n_slots; i++) {
+        ob_serial_bus_slot_t *slot = &bus->slots[i];
+        if (slot->adopted && slot->move_active) {
+            ob_servo_tick(&bus->moves[i], now_ms);
+        }
+    }
+    /* The bus work is measured on the wire's own clock. */
     const uint32_t start = now_us(bus);
     send_commands(bus);
     /* Worst case of one read: the request, then the whole reply deadline. */

@@ -19,6 +19,13 @@
  * write_duty and write_coast set what the next tick sends. So the control
  * loop runs on the tick with no Python, on the hub and in the simulator.
  *
+ * A slot can also run its own position control, the manual's st_move_core:
+ * ob_serial_bus_move() and ob_serial_bus_hold() start a trapezoid move or a
+ * position lock on the slot (a servo core, servo.h, over the slot's motor
+ * IO) that the engine's tick advances before it sends the duties, so a motor
+ * a DriveBase adopted keeps its run_angle()/hold() on the tick with no
+ * Python. ob_serial_bus_arrived() is the arrival flag, ob_serial_bus_stalled()
+ * the stall flag (pushing hard but barely moving, from the servo's feedback).
  * A servo that stops answering shows in its counters: replies, failed reads
  * and failed reads in a row; after OB_SERIAL_BUS_SILENT_READS failures in a
  * row its angle, speed and load read as unavailable, which the runtime turns
@@ -33,6 +40,7 @@
 #include <stdint.h>
 
 #include "ob_types.h"
+#include "servo.h"
 #include "uart.h"
 
 #define OB_SERIAL_BUS_MAX_SLOTS 8
@@ -46,6 +54,9 @@
 /* Attempts of the transactions run outside the tick (adopt, release). */
 #define OB_SERIAL_BUS_ATTEMPTS 3
 #define OB_SERIAL_BUS_DEFAULT_BAUD 1000000u
+/* The stall flag's defaults (the ST-3215/ST-3032 drivers' STALL_LOAD_PCT and STALL_SPEED_DPS). */
+#define OB_SERIAL_BUS_STALL_LOAD_PCT 80.0f
+#define OB_SERIAL_BUS_STALL_SPEED_DPS 20.0f
 
 typedef enum {
     OB_SERIAL_BUS_OK = 0,
@@ -80,6 +91,7 @@ typedef struct {
     uint32_t replies;
     uint32_t failed_reads;
     uint32_t failed_in_a_row;
+    bool move_active; /* st_move_core: the slot's own move or hold (bus->moves[slot]) drives it */
 } ob_serial_bus_slot_t;
 
 typedef struct ob_serial_bus {
@@ -95,6 +107,8 @@ typedef struct ob_serial_bus {
     uint32_t last_tick_bus_us; /* wire time the last tick used */
     uint64_t bus_us_total;
     uint32_t garbage_frames; /* frames dropped: bad checksum, wrong id, wrong length */
+    /* st_move_core, one per slot, apart from the slots the bus work walks every tick. */
+    ob_servo_t moves[OB_SERIAL_BUS_MAX_SLOTS];
 } ob_serial_bus_t;
 
 /* An engine over uart at baud, with no slots. */
@@ -124,6 +138,31 @@ float ob_serial_bus_angle_deg(const ob_serial_bus_slot_t *slot);
 
 /* True when some slot is adopted (the engine has bus work to do each tick). */
 bool ob_serial_bus_active(const ob_serial_bus_t *bus);
+
+/*
+ * st_move_core. A move of angle_deg (relative, run_angle's direction rule) at
+ * speed_dps with the given acceleration (magnitude; 0: the core's default),
+ * ending in then; or a hold where the shaft is. Either makes the slot's own
+ * controller its driver until ob_serial_bus_end_move() (a DriveBase or
+ * another controller taking the slot back), which leaves the output as is.
+ */
+void ob_serial_bus_move(ob_serial_bus_slot_t *slot, float speed_dps, float angle_deg, ob_then_t then,
+                        float accel_dps2);
+void ob_serial_bus_hold(ob_serial_bus_slot_t *slot);
+void ob_serial_bus_end_move(ob_serial_bus_slot_t *slot);
+
+/* The arrival flag: no move is active, or it reached its target (a hold never ends). */
+bool ob_serial_bus_arrived(const ob_serial_bus_slot_t *slot);
+
+/* The move lost the servo's feedback and was halted (coasting). */
+bool ob_serial_bus_move_lost_feedback(const ob_serial_bus_slot_t *slot);
+
+/*
+ * The stall flag: the servo pushes at least load_pct of its stall load while
+ * turning at most speed_dps (the drivers' STALL_LOAD_PCT / STALL_SPEED_DPS),
+ * or the slot's move stalled. False while the slot is silent.
+ */
+bool ob_serial_bus_stalled(const ob_serial_bus_slot_t *slot, float load_pct, float speed_dps);
 
 /* One tick's bus work (an ob_tick_fn_t; ctx is the engine). */
 void ob_serial_bus_tick(void *ctx, uint32_t now_ms);

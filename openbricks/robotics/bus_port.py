@@ -8,13 +8,17 @@ chain keep working.
 
 A wheel has exactly one driver at a time. Most of the time that is the drive base's controller.
 A direct motor command (run_speed, run_angle, hold, dc, ...) takes its wheel back the Pybricks way:
-the drive base's move ends, its other wheel is released, and a native servo controller on the
-slot's motor IO runs the command; the next drive base move takes both wheels again.
+the drive base's move ends, its other wheel is released, and the command runs on the slot: a
+position move or hold on the engine's own per-slot core (the manual's st_move_core: `done()` reads
+its arrival flag), a speed or duty command on a native servo controller over the slot's motor IO;
+the next drive base move takes both wheels again.
 
 The engine contract (shared with the simulator and the firmware; docs/architecture.md, "The bus engine"):
 `adopt(servo_id, invert=False) -> slot`, `motor_io(slot)` (a native MotorIO, or an object with
 `read_angle() -> deg | None`, `write_duty(pct)`, `coast()`), `angle_deg(slot)`, `speed_dps(slot)`,
-`load_pct(slot)`, `stats(slot) -> (replies, failed_reads, failed_in_a_row)`, `release(slot)`.
+`load_pct(slot)`, `stats(slot) -> (replies, failed_reads, failed_in_a_row)`, `release(slot)`;
+st_move_core: `move(slot, speed_dps, angle_deg, then=, accel_dps2=)`, `hold(slot)`, `end_move(slot)`,
+`done(slot)` (the arrival flag), `stalled(slot, load_pct, speed_dps)` (the stall flag).
 Angles, speeds and loads are in the adopting motor's user frame (its invert applied).
 """
 
@@ -99,6 +103,7 @@ class BusPort:
             servo = self._servos.get(slot)
             if servo is not None:
                 process.unsubscribe(servo)
+            self.engine.end_move(slot)
         self._base = (controller, slots)
         estop.on_engage(self.halt)  # again after each program boundary, which forgets the halts
 
@@ -124,6 +129,9 @@ class BusPort:
             self._base[0].stop("coast")
         for servo in self._servos.values():
             servo.coast()
+        for slot in self._motors:
+            self.engine.end_move(slot)
+            self.engine.motor_io(slot).coast()
 
     def _servo(self, slot, what, motion=True):
         """The native servo controller that runs direct commands on `slot`, now driving it.
@@ -136,6 +144,7 @@ class BusPort:
         if motion:
             estop.check("%s.%s" % (motor.side or type(motor).__name__, what))
         self._take_from_drivebase(slot)
+        self.engine.end_move(slot)
         servo = self._servos.get(slot)
         if servo is None:
             kwargs = io_kwargs(self.engine.motor_io(slot))
@@ -149,6 +158,19 @@ class BusPort:
         _openbricks_native.motor_process.subscribe(servo)
         estop.on_engage(self.halt)
         return servo
+
+    def _move_core(self, slot, what, motion=True):
+        """Make the engine's own per-slot core (st_move_core) the driver of `slot`."""
+        motor = self._motors[slot]
+        if motion:
+            estop.check("%s.%s" % (motor.side or type(motor).__name__, what))
+        self._take_from_drivebase(slot)
+        servo = self._servos.get(slot)
+        if servo is not None:
+            import _openbricks_native
+
+            _openbricks_native.motor_process.unsubscribe(servo)
+        estop.on_engage(self.halt)
 
     def _checked(self, slot):
         error = self.silent_error(slot)
@@ -178,11 +200,10 @@ class BusPort:
     def stalled(self, slot):
         self._checked(slot)
         servo = self._servos.get(slot)
-        if servo is not None and self._base is None:
-            return servo.stalled()
+        if servo is not None and self._base is None and servo.stalled():
+            return True
         motor = self._motors[slot]
-        pushing = abs(self.engine.load_pct(slot)) >= motor.STALL_LOAD_PCT
-        return pushing and abs(self.engine.speed_dps(slot)) <= motor.STALL_SPEED_DPS
+        return self.engine.stalled(slot, motor.STALL_LOAD_PCT, motor.STALL_SPEED_DPS)
 
     def run_speed(self, slot, deg_per_s):
         self._checked(slot)
@@ -199,6 +220,7 @@ class BusPort:
     def coast(self, slot):
         # Releasing a wheel is always allowed, e-stop or not, and needs no controller of its own.
         self._take_from_drivebase(slot)
+        self.engine.end_move(slot)
         servo = self._servos.get(slot)
         if servo is not None:
             servo.coast()
@@ -207,7 +229,8 @@ class BusPort:
 
     def hold(self, slot):
         self._checked(slot)
-        self._servo(slot, "hold", motion=False).hold()
+        self._move_core(slot, "hold", motion=False)
+        self.engine.hold(slot)
 
     def set_duty_limit(self, slot, limit_pct):
         self._limits[slot] = limit_pct
@@ -219,21 +242,22 @@ class BusPort:
         if deg_per_s == 0:
             raise ValueError("run_angle(deg_per_s=0): the move would never finish; give a non-zero speed")
         self._checked(slot)
-        servo = self._servo(slot, "run_angle")
-        servo.run_angle(abs(deg_per_s), target_angle, then=then)
+        self._move_core(slot, "run_angle")
+        motor = self._motors[slot]
+        accel = motor.accel_dps2 if motor.accel_dps2 > 0 else None
+        self.engine.move(slot, abs(deg_per_s), target_angle, then=then, accel_dps2=accel)
         if wait:
             while not self.done(slot):
                 time.sleep_ms(_POLL_MS)
 
     def done(self, slot):
-        servo = self._servos.get(slot)
-        if servo is None:
-            return True
-        if servo.feedback_lost:
+        """The arrival flag of the slot's move (st_move_core): the tick advanced it, nothing more to do."""
+        try:
+            return self.engine.done(slot)
+        except OSError:
             raise self.silent_error(slot) or OSError(
                 "%s lost its position feedback mid-move" % (self._motors[slot].side or "the motor")
-            )
-        return servo.done()
+            ) from None
 
     def release_all(self):
         """Hand every slot back to the engine (coasting); the motors stay unusable until re-adopted."""
@@ -247,5 +271,6 @@ class BusPort:
             servo = self._servos.pop(slot, None)
             if servo is not None:
                 process.unsubscribe(servo)
+            self.engine.end_move(slot)
             self._motors.pop(slot).adopt(None, None)
             self.engine.release(slot)

@@ -63,7 +63,7 @@ def main():
     start = (bench.angle_deg(1), bench.angle_deg(2))
     ticks0, hard0, bus0 = process.tick_count, process.hard_tick_count(), engine.bus_stats()["ticks"]
     db.straight(300, wait=False)
-    rounds = busy(3000)
+    rounds = busy(4500)
     ticks1, hard1, bus1 = process.tick_count, process.hard_tick_count(), engine.bus_stats()["ticks"]
     straight = {
         "done": db.done(),
@@ -77,7 +77,7 @@ def main():
     }
     mid = (bench.angle_deg(1), bench.angle_deg(2))
     db.turn(90, wait=False)
-    busy(3000)
+    busy(4000)
     turn = {
         "done": db.done(),
         "left_mm": wheel_mm(1, mid[0]),

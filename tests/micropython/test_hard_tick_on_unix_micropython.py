@@ -47,8 +47,8 @@ def test_a_straight_lands_while_python_spins_without_sleeping(measured):
 
 def test_every_control_tick_of_the_busy_stretch_came_from_the_hard_tick(measured):
     straight = measured["straight"]
-    # 3 s at 1 kHz; a loaded host's timer thread may lose a few periods, never Python's doing.
-    assert straight["control_ticks"] >= 2500, straight
+    # 4.5 s at 1 kHz; a loaded host's timer thread may lose a few periods, never Python's doing.
+    assert straight["control_ticks"] >= 4000, straight
     assert straight["control_ticks"] <= straight["hard_ticks"], straight
     assert straight["bus_ticks"] == straight["control_ticks"], straight
 

@@ -248,3 +248,52 @@ def test_brake_and_hold_on_an_adopted_wheel_are_allowed_during_an_estop():
     assert abs(robot.servos[0].speed_dps()) < 2
     with raises(estop.EStopError, "left wheel.dc refused: e-stop engaged"):
         robot.left.dc(50)
+
+
+def _servo_controllers():
+    """Native Servo controllers subscribed to motor_process (none while st_move_core runs the moves)."""
+    subscribers = _openbricks_native.motor_process.subscribers()
+    return [sub for sub in subscribers if isinstance(sub, _openbricks_native.Servo)]
+
+
+def test_run_angle_on_an_adopted_wheel_runs_on_the_engine_and_done_reads_its_arrival_flag():
+    robot = ServoRobot()
+    robot.drivebase()
+    start = robot.servos[0].angle_deg()
+    robot.left.run_angle(360, 540, wait=False)
+    slot = robot.left.slot
+    assert not robot.left.done()
+    assert not robot.engine().done(slot)
+    # The move is the engine's own per-slot core (st_move_core): no servo controller in Python's hands.
+    assert _servo_controllers() == []
+    time.sleep_ms(2500)  # the tick advances the move with nobody polling done()
+    assert robot.engine().done(slot)
+    assert robot.left.done()
+    assert approx(robot.servos[0].angle_deg() - start, 540, 2)
+
+
+def test_hold_on_an_adopted_wheel_is_a_position_lock_on_the_engine_that_resists_a_push():
+    robot = ServoRobot()
+    robot.drivebase()
+    robot.right.hold()
+    held = robot.servos[1].angle_deg()
+    assert _servo_controllers() == []
+    time.sleep_ms(100)
+    robot.servos[1].turn_shaft(20)  # pushed by hand
+    time.sleep_ms(800)
+    assert approx(robot.servos[1].angle_deg(), held, 1.5)
+    assert robot.servos[1].torque_enabled
+
+
+def test_the_stall_flag_of_an_adopted_wheel_comes_from_the_engine():
+    robot = ServoRobot()
+    robot.drivebase()
+    slot = robot.left.slot
+    assert not robot.engine().stalled(slot)
+    robot.servos[0].block()
+    robot.left.run_speed(300)
+    time.sleep_ms(600)
+    assert robot.engine().stalled(slot, 80, 20)
+    assert robot.left.stalled()
+    robot.servos[0].unblock()
+    robot.left.coast()

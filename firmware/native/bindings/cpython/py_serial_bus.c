@@ -393,7 +393,88 @@ static PyObject *sb_tick(SerialBusObject *self, PyObject *arg) {
     Py_RETURN_NONE;
 }
 
+/* ---- st_move_core: the slot's own moves and holds, and its flags ---- */
+
+static PyObject *sb_move(SerialBusObject *self, PyObject *args, PyObject *kwargs) {
+    static char *kwlist[] = {"slot", "speed_dps", "angle_deg", "then", "accel_dps2", NULL};
+    static const char *where = "SerialBus.move";
+    PyObject *slot_in, *speed_in, *angle_in, *then_in = NULL, *accel_in = Py_None;
+    if (!PyArg_ParseTupleAndKeywords(args, kwargs, "OOO|OO:move", kwlist, &slot_in, &speed_in, &angle_in, &then_in,
+                                     &accel_in)) {
+        return NULL;
+    }
+    ob_serial_bus_slot_t *slot = slot_arg(self, slot_in, NULL);
+    float speed, angle, accel = 0.0f;
+    ob_then_t then = OB_THEN_HOLD;
+    if (slot == NULL || ob_py_float(speed_in, where, "speed_dps", &speed) < 0 ||
+        ob_py_float(angle_in, where, "angle_deg", &angle) < 0 ||
+        (then_in != NULL && ob_py_then(then_in, where, &then) < 0) ||
+        (accel_in != Py_None && ob_py_positive_float(accel_in, where, "accel_dps2", &accel) < 0)) {
+        return NULL;
+    }
+    if (speed == 0.0f) {
+        PyErr_Format(PyExc_ValueError, "%s: speed_dps must not be 0 (use hold() to stay in place)", where);
+        return NULL;
+    }
+    ob_serial_bus_move(slot, speed, angle, then, accel);
+    Py_RETURN_NONE;
+}
+
+static PyObject *sb_hold(SerialBusObject *self, PyObject *arg) {
+    ob_serial_bus_slot_t *slot = slot_arg(self, arg, NULL);
+    if (slot == NULL) {
+        return NULL;
+    }
+    ob_serial_bus_hold(slot);
+    Py_RETURN_NONE;
+}
+
+static PyObject *sb_end_move(SerialBusObject *self, PyObject *arg) {
+    ob_serial_bus_slot_t *slot = slot_arg(self, arg, NULL);
+    if (slot == NULL) {
+        return NULL;
+    }
+    ob_serial_bus_end_move(slot);
+    Py_RETURN_NONE;
+}
+
+static PyObject *sb_done(SerialBusObject *self, PyObject *arg) {
+    ob_serial_bus_slot_t *slot = slot_arg(self, arg, NULL);
+    if (slot == NULL) {
+        return NULL;
+    }
+    if (ob_serial_bus_move_lost_feedback(slot)) {
+        PyErr_Format(PyExc_OSError, "SerialBus.done(%d): servo id %d stopped answering mid-move; the move was halted",
+                     (int)(slot - self->bus.slots), (int)slot->servo_id);
+        return NULL;
+    }
+    return PyBool_FromLong(ob_serial_bus_arrived(slot));
+}
+
+static PyObject *sb_stalled(SerialBusObject *self, PyObject *args, PyObject *kwargs) {
+    static char *kwlist[] = {"slot", "load_pct", "speed_dps", NULL};
+    static const char *where = "SerialBus.stalled";
+    PyObject *slot_in, *load_in = Py_None, *speed_in = Py_None;
+    if (!PyArg_ParseTupleAndKeywords(args, kwargs, "O|OO:stalled", kwlist, &slot_in, &load_in, &speed_in)) {
+        return NULL;
+    }
+    ob_serial_bus_slot_t *slot = slot_arg(self, slot_in, NULL);
+    float load = OB_SERIAL_BUS_STALL_LOAD_PCT, speed = OB_SERIAL_BUS_STALL_SPEED_DPS;
+    if (slot == NULL || (load_in != Py_None && ob_py_positive_float(load_in, where, "load_pct", &load) < 0) ||
+        (speed_in != Py_None && ob_py_float(speed_in, where, "speed_dps", &speed) < 0)) {
+        return NULL;
+    }
+    return PyBool_FromLong(ob_serial_bus_stalled(slot, load, speed));
+}
+
 static PyMethodDef sb_methods[] = {
+    {"move", (PyCFunction)(void (*)(void))sb_move, METH_VARARGS | METH_KEYWORDS,
+     "move(slot, speed_dps, angle_deg, then='hold', accel_dps2=None): a position move by angle_deg on the tick."},
+    {"hold", (PyCFunction)sb_hold, METH_O, "hold(slot): lock the shaft where it is, on the tick."},
+    {"end_move", (PyCFunction)sb_end_move, METH_O, "end_move(slot): the slot's own move or hold stands down."},
+    {"done", (PyCFunction)sb_done, METH_O, "done(slot): the arrival flag (True when no move is in flight)."},
+    {"stalled", (PyCFunction)(void (*)(void))sb_stalled, METH_VARARGS | METH_KEYWORDS,
+     "stalled(slot, load_pct=80, speed_dps=20): the stall flag (pushing hard, barely moving)."},
     {"adopt", (PyCFunction)(void (*)(void))sb_adopt, METH_VARARGS | METH_KEYWORDS,
      "adopt(servo_id, invert=False, counts_per_rev=4096) -> slot: take the servo onto the engine (duty mode, "
      "coasting)."},

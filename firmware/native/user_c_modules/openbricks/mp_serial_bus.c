@@ -296,7 +296,89 @@ static mp_obj_t serial_bus_tick(mp_obj_t self_in, mp_obj_t now_in) {
 }
 static MP_DEFINE_CONST_FUN_OBJ_2(serial_bus_tick_obj, serial_bus_tick);
 
+/* ---- st_move_core: the slot's own moves and holds, and its flags ---- */
+
+static mp_obj_t serial_bus_move(size_t n_args, const mp_obj_t *pos_args, mp_map_t *kw_args) {
+    enum { ARG_self, ARG_slot, ARG_speed_dps, ARG_angle_deg, ARG_then, ARG_accel_dps2 };
+    static const mp_arg_t allowed[] = {
+        {MP_QSTR_self, MP_ARG_REQUIRED | MP_ARG_OBJ, {.u_obj = MP_OBJ_NULL}},
+        {MP_QSTR_slot, MP_ARG_REQUIRED | MP_ARG_OBJ, {.u_obj = MP_OBJ_NULL}},
+        {MP_QSTR_speed_dps, MP_ARG_REQUIRED | MP_ARG_OBJ, {.u_obj = MP_OBJ_NULL}},
+        {MP_QSTR_angle_deg, MP_ARG_REQUIRED | MP_ARG_OBJ, {.u_obj = MP_OBJ_NULL}},
+        {MP_QSTR_then, MP_ARG_OBJ, {.u_obj = MP_OBJ_NULL}},
+        {MP_QSTR_accel_dps2, MP_ARG_OBJ, {.u_obj = mp_const_none}},
+    };
+    static const char *where = "SerialBus.move";
+    mp_arg_val_t args[MP_ARRAY_SIZE(allowed)];
+    mp_arg_parse_all(n_args, pos_args, kw_args, MP_ARRAY_SIZE(allowed), allowed, args);
+    ob_serial_bus_slot_t *slot = slot_arg(MP_OBJ_TO_PTR(args[ARG_self].u_obj), args[ARG_slot].u_obj, NULL);
+    float speed = ob_mp_float(args[ARG_speed_dps].u_obj, where, "speed_dps");
+    float angle = ob_mp_float(args[ARG_angle_deg].u_obj, where, "angle_deg");
+    ob_then_t then = args[ARG_then].u_obj != MP_OBJ_NULL ? ob_mp_then(args[ARG_then].u_obj, where) : OB_THEN_HOLD;
+    float accel = ob_mp_given(args[ARG_accel_dps2].u_obj)
+                      ? ob_mp_positive_float(args[ARG_accel_dps2].u_obj, where, "accel_dps2")
+                      : 0.0f;
+    if (speed == 0.0f) {
+        mp_raise_msg_varg(&mp_type_ValueError, MP_ERROR_TEXT("%s: speed_dps must not be 0 (use hold() to stay in place)"),
+                          where);
+    }
+    ob_serial_bus_move(slot, speed, angle, then, accel);
+    return mp_const_none;
+}
+static MP_DEFINE_CONST_FUN_OBJ_KW(serial_bus_move_obj, 4, serial_bus_move);
+
+static mp_obj_t serial_bus_hold(mp_obj_t self_in, mp_obj_t slot_in) {
+    ob_serial_bus_hold(slot_arg(MP_OBJ_TO_PTR(self_in), slot_in, NULL));
+    return mp_const_none;
+}
+static MP_DEFINE_CONST_FUN_OBJ_2(serial_bus_hold_obj, serial_bus_hold);
+
+static mp_obj_t serial_bus_end_move(mp_obj_t self_in, mp_obj_t slot_in) {
+    ob_serial_bus_end_move(slot_arg(MP_OBJ_TO_PTR(self_in), slot_in, NULL));
+    return mp_const_none;
+}
+static MP_DEFINE_CONST_FUN_OBJ_2(serial_bus_end_move_obj, serial_bus_end_move);
+
+static mp_obj_t serial_bus_done(mp_obj_t self_in, mp_obj_t slot_in) {
+    serial_bus_obj_t *self = MP_OBJ_TO_PTR(self_in);
+    int index;
+    ob_serial_bus_slot_t *slot = slot_arg(self, slot_in, &index);
+    if (ob_serial_bus_move_lost_feedback(slot)) {
+        mp_raise_msg_varg(&mp_type_OSError,
+                          MP_ERROR_TEXT("SerialBus.done(%d): servo id %d stopped answering mid-move; the move was "
+                                        "halted"),
+                          index, (int)slot->servo_id);
+    }
+    return mp_obj_new_bool(ob_serial_bus_arrived(slot));
+}
+static MP_DEFINE_CONST_FUN_OBJ_2(serial_bus_done_obj, serial_bus_done);
+
+static mp_obj_t serial_bus_stalled(size_t n_args, const mp_obj_t *pos_args, mp_map_t *kw_args) {
+    enum { ARG_self, ARG_slot, ARG_load_pct, ARG_speed_dps };
+    static const mp_arg_t allowed[] = {
+        {MP_QSTR_self, MP_ARG_REQUIRED | MP_ARG_OBJ, {.u_obj = MP_OBJ_NULL}},
+        {MP_QSTR_slot, MP_ARG_REQUIRED | MP_ARG_OBJ, {.u_obj = MP_OBJ_NULL}},
+        {MP_QSTR_load_pct, MP_ARG_OBJ, {.u_obj = mp_const_none}},
+        {MP_QSTR_speed_dps, MP_ARG_OBJ, {.u_obj = mp_const_none}},
+    };
+    static const char *where = "SerialBus.stalled";
+    mp_arg_val_t args[MP_ARRAY_SIZE(allowed)];
+    mp_arg_parse_all(n_args, pos_args, kw_args, MP_ARRAY_SIZE(allowed), allowed, args);
+    ob_serial_bus_slot_t *slot = slot_arg(MP_OBJ_TO_PTR(args[ARG_self].u_obj), args[ARG_slot].u_obj, NULL);
+    float load = ob_mp_given(args[ARG_load_pct].u_obj) ? ob_mp_positive_float(args[ARG_load_pct].u_obj, where, "load_pct")
+                                                       : OB_SERIAL_BUS_STALL_LOAD_PCT;
+    float speed = ob_mp_given(args[ARG_speed_dps].u_obj) ? ob_mp_float(args[ARG_speed_dps].u_obj, where, "speed_dps")
+                                                         : OB_SERIAL_BUS_STALL_SPEED_DPS;
+    return mp_obj_new_bool(ob_serial_bus_stalled(slot, load, speed));
+}
+static MP_DEFINE_CONST_FUN_OBJ_KW(serial_bus_stalled_obj, 2, serial_bus_stalled);
+
 static const mp_rom_map_elem_t serial_bus_locals_table[] = {
+    {MP_ROM_QSTR(MP_QSTR_move), MP_ROM_PTR(&serial_bus_move_obj)},
+    {MP_ROM_QSTR(MP_QSTR_hold), MP_ROM_PTR(&serial_bus_hold_obj)},
+    {MP_ROM_QSTR(MP_QSTR_end_move), MP_ROM_PTR(&serial_bus_end_move_obj)},
+    {MP_ROM_QSTR(MP_QSTR_done), MP_ROM_PTR(&serial_bus_done_obj)},
+    {MP_ROM_QSTR(MP_QSTR_stalled), MP_ROM_PTR(&serial_bus_stalled_obj)},
     {MP_ROM_QSTR(MP_QSTR_adopt), MP_ROM_PTR(&serial_bus_adopt_obj)},
     {MP_ROM_QSTR(MP_QSTR_release), MP_ROM_PTR(&serial_bus_release_obj)},
     {MP_ROM_QSTR(MP_QSTR_motor_io), MP_ROM_PTR(&serial_bus_motor_io_obj)},
