@@ -12,6 +12,15 @@ static mp_obj_t mod_interrupt_main(void) {
 }
 static MP_DEFINE_CONST_FUN_OBJ_0(mod_interrupt_main_obj, mod_interrupt_main);
 
+#if !defined(ESP_PLATFORM)
+/* Host builds tick motor_process themselves only while the hard tick runs it (every subscriber native);
+ * otherwise their caller does (robotics.tick starts a machine.Timer). The hub always ticks itself. */
+static mp_obj_t mod_ticks_itself(void) {
+    return mp_obj_new_bool(ob_mp_motor_process_hard_ticked());
+}
+static MP_DEFINE_CONST_FUN_OBJ_0(mod_ticks_itself_obj, mod_ticks_itself);
+#endif
+
 /* motor_process lives on the heap (see mp_scheduler.c), so it is handed out here rather than from ROM. */
 static mp_obj_t mod_getattr(mp_obj_t attr) {
     if (MP_OBJ_QSTR_VALUE(attr) == MP_QSTR_motor_process) {
@@ -39,7 +48,7 @@ static const mp_rom_map_elem_t mod_globals_table[] = {
     #if defined(ESP_PLATFORM)
     {MP_ROM_QSTR(MP_QSTR_ticks_itself), MP_ROM_TRUE},
     #else
-    {MP_ROM_QSTR(MP_QSTR_ticks_itself), MP_ROM_FALSE},
+    {MP_ROM_QSTR(MP_QSTR_ticks_itself), MP_ROM_PTR(&mod_ticks_itself_obj)},
     #endif
 };
 static MP_DEFINE_CONST_DICT(mod_globals, mod_globals_table);
