@@ -177,13 +177,11 @@ def _on_dask(address: str, jobs: dict, source: str, template: SimJob) -> Iterato
         raise SweepError(
             f"--dask needs Dask's distributed scheduler client ({exc}): pip install 'openbricks[sim]'"
         ) from None
+    _probe(address)
     try:
         client = Client(address, timeout=DASK_CONNECT_TIMEOUT_S, set_as_default=False)
-    except (OSError, TimeoutError, ValueError) as exc:
-        raise SweepError(
-            f"cannot reach the Dask scheduler at {address} within {DASK_CONNECT_TIMEOUT_S:g} s ({exc}): "
-            "is `dask scheduler` running there, and is the address tcp://HOST:PORT?"
-        ) from None
+    except Exception as exc:  # noqa: BLE001 - whatever went wrong, the user gets one line
+        raise SweepError(f"cannot use the Dask scheduler at {address}: {exc}") from None
     try:
         source_future = client.scatter(source, broadcast=True)
         futures = {
@@ -201,6 +199,39 @@ def _on_dask(address: str, jobs: dict, source: str, template: SimJob) -> Iterato
             client.cancel(list(futures))
     finally:
         client.close()
+
+
+def _probe(address: str) -> None:
+    """Shake hands with the scheduler before a Client is built: a Client that fails to connect
+    lingers and spends another two timeouts closing, and something else listening at the address
+    (a web server on the wrong port) makes Dask's handshake read nonsense."""
+    import asyncio
+
+    from distributed.comm import connect
+
+    async def handshake():
+        comm = await connect(address, timeout=DASK_CONNECT_TIMEOUT_S)
+        await comm.close()
+
+    scheme, _, where = address.partition("://") if "://" in address else ("tcp", "", address)
+    host, _, port = where.rpartition(":")
+    if scheme not in ("tcp", "tls") or not host or not port.isdigit():
+        raise SweepError(
+            f"--dask {address!r}: give the scheduler's address as tcp://HOST:PORT, e.g. tcp://10.0.0.5:8786"
+        )
+    try:
+        asyncio.run(handshake())
+    except MemoryError:  # the "message length" it read was someone else's bytes
+        raise SweepError(
+            f"something other than a Dask scheduler answered at {address}: check the port (a scheduler "
+            "listens on 8786 unless told otherwise)"
+        ) from None
+    except Exception as exc:  # noqa: BLE001 - refused, timed out, or not Dask at all
+        reason = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        raise SweepError(
+            f"cannot reach the Dask scheduler at {address} within {DASK_CONNECT_TIMEOUT_S:g} s ({reason}): "
+            "is `dask scheduler` running there, and is the address tcp://HOST:PORT?"
+        ) from None
 
 
 def summarise(rows: list[SeedRow]) -> dict:

@@ -108,3 +108,24 @@ def test_an_unreachable_dask_scheduler_is_a_clear_error_within_the_timeout(tmp_p
     ):
         list(sweep(SimJob(str(program)), [1, 2], dask=f"tcp://127.0.0.1:{port}"))
     assert time.monotonic() - started < 30
+
+
+def test_something_else_listening_at_the_address_is_named_as_not_a_scheduler(tmp_path):
+    """A web server on the wrong port: Dask's handshake would read its reply as a message length."""
+    import threading
+
+    server = socket.create_server(("127.0.0.1", 0))
+    port = server.getsockname()[1]
+
+    def answer():
+        with server:
+            conn, _ = server.accept()
+            with conn:
+                conn.sendall(b"HTTP/1.1 400 Bad Request\r\nContent-Length: 0\r\n\r\n" * 4)
+                time.sleep(1.0)
+
+    threading.Thread(target=answer, daemon=True).start()
+    program = tmp_path / "mission.py"
+    program.write_text("print('hi')\n")
+    with pytest.raises(SweepError, match="something other than a Dask scheduler answered"):
+        list(sweep(SimJob(str(program)), [1], dask=f"tcp://127.0.0.1:{port}"))

@@ -81,6 +81,7 @@ def test_json_rows_carry_sim_runs_keys_and_the_csv_a_row_per_seed(program, tmp_p
     [
         (["--world", "moon", "--seeds", "1-3"], "unknown world 'moon'"),
         (["--seeds", "9-2"], "the range 9-2 runs backwards; write 2-9"),
+        (["--seeds", "1", "--dask", "scheduler"], "give the scheduler's address as tcp://HOST:PORT"),
         (["--seeds", "1-50000"], "more than 10000 seeds"),
         (["--seeds", "one"], "'one' in --seeds 'one' is not a seed or a range"),
         (
