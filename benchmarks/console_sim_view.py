@@ -1,18 +1,19 @@
 """Watching a sim run through the console: how much do 1, 5 and 20 viewers of its 3D view slow it?
 
-A real daemon (uvicorn on 127.0.0.1, in this process) starts the same unpaced sim run (a drive base
-going back and forth, as fast as the CPU allows) once per viewer count. The viewers are WebSockets in
+A real daemon (uvicorn on 127.0.0.1, in this process) starts the same sim run (a drive base going
+back and forth, paced at PACE times real time, so the view draws the same frames per simulated second
+whatever the machine's load) once per viewer count. The viewers are WebSockets in
 one other process connected to the run's view through the daemon's port (the proxy, as browsers
 would be), each reading everything viser sends. Once they are all connected, the run's simulated
 time and the run process's CPU time are read twice, WINDOW_S apart.
 
-Two figures per count. The run's CPU time per simulated second is what watching costs the run
-(viser encodes and sends each frame to every viewer on the run's own threads), and it does not
-depend on what else the machine is doing: its growth over the no-viewer run is the slowdown a run
-going flat out on a core of its own would see. The run's speed (simulated seconds per wall-clock
-second) is the slowdown as measured here, which the machine's load from other work moves from run to
-run. Each count is measured ROUNDS times, interleaved, and the median kept. The daemon's own CPU
-(the proxy) is the third figure: it runs in another process, beside the run, not in it.
+The run's CPU time per simulated second is what watching costs the run (viser encodes and sends
+each frame on the run's own threads, once per connection), and it does not depend on what else the
+machine is doing: its growth over the no-viewer run is the slowdown a run going flat out on a core of
+its own would see. The run's speed (simulated seconds per wall-clock second, PACE when it keeps up)
+is the slowdown as measured here. The connections row counts the run's viser server's clients: the
+daemon shares one among all browsers. The daemon's own CPU (the proxy) runs in another process,
+beside the run, not in it. Each count is measured ROUNDS times, interleaved, and the median kept.
 """
 
 from __future__ import annotations
@@ -37,6 +38,7 @@ REPO = Path(__file__).resolve().parent.parent
 VIEWERS = (0, 1, 5, 20)
 ROUNDS = 2
 WINDOW_S = 8.0
+PACE = 2.0
 PROGRAM = """\
 from openbricks.drivers.st3032 import ST3032Motor
 from openbricks.robotics import DriveBase
@@ -73,6 +75,16 @@ class _Daemon:
         self.thread.join(30)
 
 
+def _connections(port: int) -> int:
+    """Established TCP connections to 127.0.0.1:port (the viser server's clients)."""
+    count = 0
+    for line in Path("/proc/net/tcp").read_text().splitlines()[1:]:
+        local, _remote, state = line.split()[1:4]
+        if int(local.split(":")[1], 16) == port and state == "01":
+            count += 1
+    return count
+
+
 def _cpu_s(pid: int) -> float:
     fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
     return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
@@ -89,12 +101,13 @@ def _measure(daemon: _Daemon, client: httpx.Client, viewers: int) -> dict:
     the bytes per second each viewer received."""
     run = client.post(
         "/api/sim/runs",
-        json={"program": "bench.py", "speed": None, "limit_ms": 3_600_000, "wall_limit_s": 600},
+        json={"program": "bench.py", "speed": PACE, "limit_ms": 3_600_000, "wall_limit_s": 600},
     ).json()
     run_id = run["run_id"]
     while client.get(f"/api/sim/runs/{run_id}").json()["state"] != "running":
         time.sleep(0.1)
-    pid = daemon.app.state.ctx.sim.live[run_id]._process.pid
+    job = daemon.app.state.ctx.sim.live[run_id]
+    pid = job._process.pid
     clients = None
     try:
         if viewers:
@@ -116,6 +129,7 @@ def _measure(daemon: _Daemon, client: httpx.Client, viewers: int) -> dict:
             )
             assert clients.stdout.readline().strip() == "connected"
         time.sleep(1.0)  # the viewers' initial scene is sent and drawn
+        connections = _connections(job.port)
         t0, sim0, cpu0, own0 = _sample(client, run_id, pid)
         time.sleep(WINDOW_S)
         t1, sim1, cpu1, own1 = _sample(client, run_id, pid)
@@ -129,6 +143,7 @@ def _measure(daemon: _Daemon, client: httpx.Client, viewers: int) -> dict:
             "cpu_per_sim_s": (cpu1 - cpu0) / sim_s,
             "daemon_cpu": 100 * (own1 - own0) / (t1 - t0),
             "traffic": per_viewer,
+            "connections": connections,
         }
     finally:
         client.post(f"/api/sim/runs/{run_id}/stop")
@@ -157,7 +172,7 @@ def run() -> list[Row]:
     base_cpu, base_speed = median(0, "cpu_per_sim_s"), median(0, "speed")
     rows = [
         Row("no viewer: run CPU per sim s", 1000 * base_cpu, "ms"),
-        Row("no viewer: run speed", base_speed, "sim s/s", "unpaced, on this machine as loaded now"),
+        Row("no viewer: run speed", base_speed, "sim s/s", f"paced at {PACE:g}x"),
     ]
     for n in VIEWERS[1:]:
         cpu, speed = median(n, "cpu_per_sim_s"), median(n, "speed")
@@ -169,9 +184,8 @@ def run() -> list[Row]:
                 "%",
                 "a run alone on its core",
             ),
-            Row(
-                f"{n} viewer(s): slowdown measured", 100 * (1 - speed / base_speed), "%", "wall clock, loaded"
-            ),
+            Row(f"{n} viewer(s): slowdown measured", 100 * (1 - speed / base_speed), "%", "wall clock"),
+            Row(f"{n} viewer(s): connections to the run", median(n, "connections"), "", "viser's clients"),
             Row(
                 f"{n} viewer(s): daemon CPU",
                 median(n, "daemon_cpu"),

@@ -21,7 +21,7 @@ from openbricks_server.daemon.auth import require_viewer
 from openbricks_server.daemon.errors import ApiError
 from openbricks_server.daemon.routers.sim import _check_id
 from openbricks_server.daemon.sim.jobs import START_TIMEOUT_S
-from openbricks_server.daemon.sim.proxy import forward_page, forward_socket
+from openbricks_server.daemon.sim.proxy import forward_page
 
 router = APIRouter(include_in_schema=False)
 
@@ -85,10 +85,10 @@ async def _socket(websocket: WebSocket, run_id: str) -> None:
             await asyncio.wait_for(job.ready.wait(), START_TIMEOUT_S)
         except TimeoutError:
             pass
-    if job is None or job.port is None or job.ended.is_set():
+    if job is None or job.relay is None or job.ended.is_set():
         await websocket.close(code=1008, reason="this sim run is not live: watch its replay")
         return
-    await forward_socket(websocket, job.port)
+    await job.relay.serve(websocket)
 
 
 @router.websocket("/sim/runs/{run_id}/view")

@@ -29,7 +29,7 @@ import time
 from pathlib import Path
 
 from openbricks_server.daemon.hub_events import OutputLine, RunStart, TelemetrySample
-from openbricks_server.daemon.sim.proxy import http_client
+from openbricks_server.daemon.sim.proxy import ViewRelay, http_client
 from openbricks_server.daemon.store import now_ms
 from openbricks_sim.console_job import CHILD_MAIN
 from openbricks_sim.job import SimJob
@@ -67,6 +67,7 @@ class SimRunJob:
         self.ready = asyncio.Event()  # the 3D view answers (its port is known)
         self.ended = asyncio.Event()
         self.port: int | None = None
+        self.relay: ViewRelay | None = None  # the browsers' shared connection to the view
         self.paused = False
         self.speed: float | None = job.speed
         self.sim_ms = 0
@@ -131,6 +132,7 @@ class SimRunJob:
             self._telemetry(event)
         elif kind == "ready":
             self.port = int(event["port"])
+            self.relay = ViewRelay(self.port)
             self.jobs.ctx.store.sim_runs.update(self.run_id, state="running", chassis=event.get("chassis"))
             self.ready.set()
             self.jobs.publish(self.run_id)
@@ -200,6 +202,8 @@ class SimRunJob:
         detail = error.strip().splitlines()[-1] if error and error.strip() else None
         self.jobs.ctx.hub_events.run_ended(self.run_id, exit_reason, detail, now_ms())
         self.jobs.live.pop(self.run_id, None)
+        if self.relay is not None:
+            asyncio.get_running_loop().create_task(self.relay.close())
         self.ended.set()
         self.ready.set()  # nobody waits for a view that will never come
         self.jobs.publish(self.run_id)

@@ -42,6 +42,16 @@ time.sleep_ms(600000)
 """
 
 
+def connections_to(port: int) -> int:
+    """Established TCP connections whose server end is 127.0.0.1:port."""
+    count = 0
+    for line in Path("/proc/net/tcp").read_text().splitlines()[1:]:
+        local, _remote, state = line.split()[1:4]
+        if int(local.split(":")[1], 16) == port and state == "01":
+            count += 1
+    return count
+
+
 def listening_addresses(port: int) -> set[str]:
     """Local addresses of the sockets listening on `port` (IPv4, from /proc/net/tcp)."""
     found = set()
@@ -150,6 +160,18 @@ def test_the_view_is_served_through_the_daemon_only_and_replays_where_the_run_en
         assert live.url == view  # the token was traded for the cookie and left the address bar
         wait_until(operator, run_id, lambda r: r["sim_ms"] > 4000 or ended(r), timeout_s=120)
         screenshot_when_drawn(live, "live-view.png")
+        # A second watcher joins late: it is sent the scene built so far, over the same one connection
+        # to the run's viser server (viser encodes each frame once per connection, in the run).
+        with connect(
+            ws_url,
+            origin=daemon.origin,
+            additional_headers={"Authorization": f"Bearer {viewer_token}"},
+            subprotocols=["viser-v" + __import__("viser").__version__],
+            open_timeout=10,
+            max_size=None,
+        ) as late:
+            assert len(late.recv(timeout=20)) > 1000  # the scene's meshes, first
+            assert connections_to(job.port) == 1
         live.close()
 
         stopped = operator.post(f"/api/sim/runs/{run_id}/stop").json()
