@@ -26,7 +26,7 @@ _THIS_FOLDER = Path(__file__).parent
 def pytest_make_collect_report(collector):
     if not Path(collector.path).is_relative_to(_THIS_FOLDER):
         return (yield)
-    sys.modules["time"] = fakes.clock
+    sys.modules["time"] = fakes.mptime
     try:
         return (yield)
     finally:
@@ -35,7 +35,7 @@ def pytest_make_collect_report(collector):
 
 @pytest.fixture(autouse=True)
 def _fresh_board():
-    sys.modules["time"] = fakes.clock
+    sys.modules["time"] = fakes.mptime
     fakes.reset()
     yield
     sys.modules["time"] = _HOST_TIME

@@ -10,7 +10,7 @@ serves, it is installed as it is.
 import sys
 
 from . import bluetooth, clock, dupterm, machine
-from .hardware import esp32, neopixel
+from .hardware import esp32, mptime, neopixel
 
 _IS_MICROPYTHON = sys.implementation.name == "micropython"
 _BOARD_RUNTIME = (
@@ -31,14 +31,14 @@ def _print_exception(exc, file=None):
 def install():
     sys.modules["machine"] = machine
     sys.modules["esp32"] = esp32
-    sys.modules["time"] = clock
+    sys.modules["time"] = mptime
     sys.modules["bluetooth"] = bluetooth
     sys.modules["neopixel"] = neopixel
     dupterm.install()
     if not _IS_MICROPYTHON:
-        from openbricks_sim.shim import framebuf
+        from openbricks_sim.shim import framebuf, micropython
 
-        from . import deflate, micropython
+        from . import deflate
 
         sys.modules["micropython"] = micropython
         sys.modules["framebuf"] = framebuf  # built into MicroPython
@@ -54,11 +54,11 @@ def install():
 
 
 def reset():
-    clock.reset()
+    time_now = clock.reset()
     if not _IS_MICROPYTHON:
-        from . import micropython  # MicroPython has its own scheduler
+        from openbricks_sim.shim import micropython  # MicroPython has its own scheduler
 
-        micropython.reset()
+        micropython.bind(time_now)  # a soft reset drops whatever was still queued
     esp32.bind({})  # a fresh, empty flash
     machine.board.reset()
     bluetooth.reset()

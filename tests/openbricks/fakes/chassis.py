@@ -32,11 +32,9 @@ class Chassis:
         self.heading_deg = 0.0
         self.travel_mm = 0.0
         self._last = [wheel() for wheel in self._wheels]
-        self.next_due_us = clock.now_us() + _STEP_US
-        clock.register_timer(self)
+        self._steps = clock.every_us(_STEP_US, self._step)
 
-    def fire(self):
-        self.next_due_us += _STEP_US
+    def _step(self):
         now = [wheel() for wheel in self._wheels]
         ground = [(now[i] - self._last[i]) * self.mm_per_deg * (1.0 - self.slip[i]) for i in (0, 1)]
         self._last = now
@@ -51,4 +49,4 @@ class Chassis:
             self.gyro.yaw_rate_dps = math.degrees(turn_rad) * 1e6 / _STEP_US
 
     def close(self):
-        clock.unregister_timer(self)
+        self._steps.cancel()

@@ -60,8 +60,7 @@ class DCMotorRig:
         self.wall_deg = None  # an end stop the shaft cannot pass (approached from below if above start)
         self.duty_log = []  # (time ms, duty or None) whenever the bridge output changes
         self._counts = self._plant_counts()
-        self.next_due_us = clock.now_us() + step_us
-        clock.register_timer(self)
+        self._steps = clock.every_us(step_us, self._step)
 
     def _plant_counts(self):
         angle = self.plant.angle_deg * self.counts_per_rev / 360.0
@@ -82,8 +81,7 @@ class DCMotorRig:
             return 0.0
         return enable if a else -enable
 
-    def fire(self):
-        self.next_due_us += self.step_us
+    def _step(self):
         duty = self.bridge_duty()
         if not self.duty_log or self.duty_log[-1][1] != duty:
             bounded.append(self.duty_log, (clock.now_us() // 1000, duty))
@@ -98,4 +96,4 @@ class DCMotorRig:
             self._counts = counts
 
     def close(self):
-        clock.unregister_timer(self)
+        self._steps.cancel()

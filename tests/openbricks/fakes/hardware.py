@@ -8,8 +8,8 @@ CPython's.
 import sys
 
 if sys.implementation.name == "micropython":
-    from shim import esp32, neopixel
+    from shim import esp32, mptime, neopixel, virtual_clock
 else:
-    from openbricks_sim.shim import esp32, neopixel
+    from openbricks_sim.shim import esp32, mptime, neopixel, virtual_clock
 
-__all__ = ("esp32", "neopixel")
+__all__ = ("esp32", "mptime", "neopixel", "virtual_clock")

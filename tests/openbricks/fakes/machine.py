@@ -11,6 +11,7 @@ widths, and what the runtime drove.
 import sys
 
 from . import bounded, clock
+from .hardware import mptime
 
 
 class _Board:
@@ -254,30 +255,31 @@ class _HardwareTimer:
 
     def __init__(self, timer_id):
         self.timer_id = timer_id
-        self.next_due_us = None
-        self.period_us = 0
+        self._alarm = None  # the clock's handle while armed
         self.mode = Timer.PERIODIC
         self.callback = None
         self.owner = None  # the Timer object whose init() armed it; the callback receives it
 
+    @property
+    def next_due_us(self):
+        alarm = self._alarm
+        return None if alarm is None or alarm.cancelled else alarm.due_us
+
     def arm(self, owner, mode, period_us, callback):
+        self.disarm()
         self.owner = owner
         self.mode = mode
-        self.period_us = period_us
         self.callback = callback
-        self.next_due_us = clock.now_us() + period_us
-        clock.register_timer(self)
+        repeat_us = period_us if mode == Timer.PERIODIC else 0
+        self._alarm = clock.current().schedule(self.fire, period_us, repeat_us)
 
     def disarm(self):
-        self.next_due_us = None
-        clock.unregister_timer(self)
+        if self._alarm is not None:
+            self._alarm.cancel()
+            self._alarm = None
 
     def fire(self):
         callback = self.callback
-        if self.mode == Timer.PERIODIC:
-            self.next_due_us += self.period_us
-        else:
-            self.disarm()
         if callback is None:
             return
         try:
@@ -332,13 +334,13 @@ class RTC:
 
     def datetime(self, dt=None):
         if dt is None:
-            secs = clock.time()
-            t = clock.gmtime(secs)
+            secs = mptime.time()
+            t = mptime.gmtime(secs)
             # (year, month, day, weekday, hours, minutes, seconds, subseconds)
             sub_us = clock.epoch_us() % 1_000_000
             return (t[0], t[1], t[2], t[6], t[3], t[4], t[5], sub_us)
         year, month, day, _wd, hours, minutes, seconds, sub = dt
-        secs = clock.mktime((year, month, day, hours, minutes, seconds, 0, 0, 0))
+        secs = mptime.mktime((year, month, day, hours, minutes, seconds, 0, 0, 0))
         board.rtc_datetime = dt
         clock.set_epoch_ms(secs * 1000 + sub // 1000)
         return None
@@ -384,7 +386,7 @@ class UART:
     def read(self, n=None):
         if not self._rx:
             if self.timeout:
-                clock.sleep_ms(self.timeout)
+                mptime.sleep_ms(self.timeout)
             return None
         if n is None or n > len(self._rx):
             n = len(self._rx)
@@ -501,7 +503,7 @@ SoftSPI = SPI
 
 def time_pulse_us(pin, pulse_level, timeout_us=1_000_000):
     width = board.pulses_us.get(_pin_id(pin), -1)
-    clock.sleep_us(width if width > 0 else timeout_us)
+    mptime.sleep_us(width if width > 0 else timeout_us)
     return width
 
 
@@ -526,7 +528,7 @@ def soft_reset():
 
 
 def idle():
-    clock.sleep_us(100)
+    mptime.sleep_us(100)
 
 
 def disable_irq():
