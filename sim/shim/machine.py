@@ -27,7 +27,8 @@ def _sim():
 
 
 def _pin_id(pin):
-    return pin.id() if isinstance(pin, Pin) else pin
+    # Any Pin-like object names its pin (a test's pins too); a number is the pin itself.
+    return pin.id() if hasattr(pin, "id") else pin
 
 
 class Pin:
@@ -529,12 +530,14 @@ class SoftSPI(SPI):
 
 
 def time_pulse_us(pin, pulse_level, timeout_us=1_000_000):
-    """The echo width the board's model reports for pin, after waiting that long (-1 on timeout)."""
+    """The echo width the board's model reports for pin, after waiting that long. On a timeout
+    (no model, or a width past timeout_us) it waits timeout_us and returns -1; a model may also
+    report the port's own timeouts, -1 (pulse too long) or -2 (it never started)."""
     board = _sim()
     width = board.pulse_us(_pin_id(pin), pulse_level)
     if width is None or width < 0 or width > timeout_us:
         board.clock.advance_us(timeout_us)
-        return -1
+        return width if width is not None and width in (-1, -2) else -1
     board.clock.advance_us(width)
     return width
 

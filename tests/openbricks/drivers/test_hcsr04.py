@@ -13,30 +13,30 @@ from openbricks.drivers.hcsr04 import HCSR04
 def test_echo_width_converts_to_millimetres_at_the_speed_of_sound():
     sensor = HCSR04(trig=5, echo=6)
     assert isinstance(sensor, DistanceSensor)
-    board.pulses_us[6] = 3500  # ~60 cm round trip
+    board.set_pulse(6, 3500)  # ~60 cm round trip
     assert sensor.distance_mm() == 600
-    board.pulses_us[6] = 583
+    board.set_pulse(6, 583)
     assert sensor.distance_mm() == 100
 
 
 def test_trigger_is_left_low_after_the_pulse():
     sensor = HCSR04(trig=5, echo=6)
-    board.pulses_us[6] = 1000
+    board.set_pulse(6, 1000)
     sensor.distance_mm()
     assert board.pins[5].value() == 0
 
 
 def test_no_echo_reads_minus_one():
     sensor = HCSR04(trig=5, echo=6, timeout_us=25_000)
-    board.pulses_us[6] = -1
+    board.set_pulse(6, -1)
     assert sensor.distance_mm() == -1
-    board.pulses_us[6] = -2  # echo stuck high
+    board.set_pulse(6, -2)  # echo stuck high
     assert sensor.distance_mm() == -1
 
 
 def test_back_to_back_readings_are_spaced_so_old_echoes_die_out():
     sensor = HCSR04(trig=5, echo=6)
-    board.pulses_us[6] = 1000
+    board.set_pulse(6, 1000)
     sensor.distance_mm()
     start = time.ticks_ms()
     sensor.distance_mm()

@@ -8,8 +8,8 @@ CPython's.
 import sys
 
 if sys.implementation.name == "micropython":
-    from shim import esp32, mptime, neopixel, virtual_clock
+    from shim import board, esp32, machine, mptime, neopixel, virtual_clock
 else:
-    from openbricks_sim.shim import esp32, mptime, neopixel, virtual_clock
+    from openbricks_sim.shim import board, esp32, machine, mptime, neopixel, virtual_clock
 
-__all__ = ("esp32", "mptime", "neopixel", "virtual_clock")
+__all__ = ("board", "esp32", "machine", "mptime", "neopixel", "virtual_clock")

@@ -1,40 +1,55 @@
-"""A fake `machine` module at the level the drivers touch: pins, ADC, PWM,
-timers, the RTC and the UART / I2C / SPI buses.
+"""`machine` for the runtime's tests: the simulator's model (sim/shim/machine.py) on a test board.
 
-Buses carry bytes to device models that tests attach (a fake ST3215 that
-answers SCS packets from a register file, I2C chips with register maps), so
-drivers are exercised through their real wire protocol. `board` is the
-test's handle on the outside world: input levels, analog voltages, pulse
-widths, and what the runtime drove.
+The timers, the RTC, bitstream, time_pulse_us and the chip-level functions are the simulator's,
+bound to `board`, a SimBoard the test sets up and reads back. The pins, ADC, PWM, encoders and
+the UART / I2C / SPI buses are still this module's own: buses carry bytes to device models that
+tests attach (a fake ST3215 that answers SCS packets from a register file, I2C chips with
+register maps), so drivers are exercised through their real wire protocol.
 """
 
-import sys
-
 from . import bounded, clock
+from .hardware import board as _sim_board
+from .hardware import machine as _model
 from .hardware import mptime
 
+# The simulator's definitions, as they are.
+HARDWARE_TIMER_COUNT = _model.HARDWARE_TIMER_COUNT
+Timer = _model.Timer
+RTC = _model.RTC
+WDT = _model.WDT
+bitstream = _model.bitstream
+time_pulse_us = _model.time_pulse_us
+freq = _model.freq
+unique_id = _model.unique_id
+reset = _model.reset
+soft_reset = _model.soft_reset
+idle = _model.idle
+lightsleep = _model.lightsleep
+deepsleep = _model.deepsleep
+disable_irq = _model.disable_irq
+enable_irq = _model.enable_irq
+reset_cause = _model.reset_cause
+PWRON_RESET = _model.PWRON_RESET
+HARD_RESET = _model.HARD_RESET
+WDT_RESET = _model.WDT_RESET
+DEEPSLEEP_RESET = _model.DEEPSLEEP_RESET
+SOFT_RESET = _model.SOFT_RESET
 
-class _Board:
-    """Everything outside the chip, as the test sets it up and reads it back."""
+
+class _Board(_sim_board.SimBoard):
+    """Everything outside the chip, as the test sets it up and reads it back: the simulator's board
+    (pulses, bitstreams, hardware timers, a reset asked for) and this module's registries."""
 
     def __init__(self):
         self.reset()
 
     def reset(self):
+        _sim_board.SimBoard.__init__(self, clock.current())
+        _model.bind(self)
         self.input_levels = {}  # pin id -> 0/1 seen by Pin.value() on inputs
-        self.analog = {}  # pin id -> raw 12-bit ADC reading
-        self.pins = {}  # pin id -> the last Pin object constructed for it
         self.pwms = {}  # pin id -> the last PWM object constructed for it
-        self.uart_devices = {}  # uart id -> device with .handle(bytes) -> bytes
         self.uarts = {}  # uart id -> the last UART object constructed for it
-        self.i2c_devices = {}  # bus id -> {address: device}
-        self.spi_devices = {}  # cs pin id -> device with .transfer(bytes) -> bytes
-        self.pulses_us = {}  # echo pin id -> pulse width time_pulse_us() returns (-1/-2 on timeout)
-        self.bitstreams = []  # (pin id, timing, bytes) written by machine.bitstream
         self.encoders = {}  # PCNT unit -> the Encoder counting on it; tests move its .count
-        self.timers = {}  # hardware timer id -> the one alarm every machine.Timer(id) shares
-        self.rtc_datetime = None
-        self.resets = 0
 
     def set_input(self, pin_id, level):
         """Drive an input pin from outside; fires the pin's IRQ on a matching edge."""
@@ -51,15 +66,6 @@ class _Board:
             for encoder in self.encoders.values():
                 if pin_id in (encoder.phase_a, encoder.phase_b):
                     encoder._line_changed()
-
-    def attach_uart(self, uart_id, device):
-        self.uart_devices[uart_id] = device
-
-    def attach_i2c(self, bus_id, address, device):
-        self.i2c_devices.setdefault(bus_id, {})[address] = device
-
-    def attach_spi(self, cs_pin_id, device):
-        self.spi_devices[cs_pin_id] = device
 
 
 board = _Board()
@@ -244,111 +250,6 @@ class Encoder:
         self.deinited = True
 
 
-# The ESP32-S3 has two timer groups of two general-purpose timers; the port numbers them 0..3 and
-# has no virtual (id -1) timers.
-HARDWARE_TIMER_COUNT = 4
-
-
-class _HardwareTimer:
-    """One of the chip's timers. Every machine.Timer(id) built for the same id drives this one
-    alarm, so a second init() on the same id replaces the first one's callback, as on the hub."""
-
-    def __init__(self, timer_id):
-        self.timer_id = timer_id
-        self._alarm = None  # the clock's handle while armed
-        self.mode = Timer.PERIODIC
-        self.callback = None
-        self.owner = None  # the Timer object whose init() armed it; the callback receives it
-
-    @property
-    def next_due_us(self):
-        alarm = self._alarm
-        return None if alarm is None or alarm.cancelled else alarm.due_us
-
-    def arm(self, owner, mode, period_us, callback):
-        self.disarm()
-        self.owner = owner
-        self.mode = mode
-        self.callback = callback
-        repeat_us = period_us if mode == Timer.PERIODIC else 0
-        self._alarm = clock.current().schedule(self.fire, period_us, repeat_us)
-
-    def disarm(self):
-        if self._alarm is not None:
-            self._alarm.cancel()
-            self._alarm = None
-
-    def fire(self):
-        callback = self.callback
-        if callback is None:
-            return
-        try:
-            callback(self.owner)
-        except Exception as exc:  # noqa: BLE001 - the hub prints a failing timer callback and carries on
-            # On the hub the callback runs from the scheduler, which prints what it raised and goes
-            # on: the program that was sleeping never sees it, and the timer keeps firing.
-            sys.print_exception(exc)
-
-
-class Timer:
-    ONE_SHOT = 0
-    PERIODIC = 1
-
-    def __init__(self, id, **kwargs):
-        if not isinstance(id, int) or not 0 <= id < HARDWARE_TIMER_COUNT:
-            raise ValueError(
-                "Timer(%r) doesn't exist: the ESP32 has hardware timers 0..%d and no virtual timers"
-                % (id, HARDWARE_TIMER_COUNT - 1)
-            )
-        self._id = id
-        self._hardware = board.timers.get(id)
-        if self._hardware is None:
-            self._hardware = board.timers[id] = _HardwareTimer(id)
-        if kwargs:
-            self.init(**kwargs)
-
-    def init(self, mode=PERIODIC, period=-1, freq=-1, callback=None):
-        if freq is not None and freq > 0:
-            period_us = 1_000_000 // freq
-        else:
-            period_us = int(period) * 1000
-        if period_us <= 0:
-            raise ValueError("Timer needs period= or freq=")
-        self._hardware.arm(self, mode, period_us, callback)
-
-    def deinit(self):
-        self._hardware.disarm()
-
-    @property
-    def next_due_us(self):
-        """When this timer's hardware alarm fires next (None while stopped); for tests."""
-        return self._hardware.next_due_us
-
-    def __repr__(self):
-        return "Timer(%d)" % self._id
-
-
-class RTC:
-    def __init__(self, id=0):
-        pass
-
-    def datetime(self, dt=None):
-        if dt is None:
-            secs = mptime.time()
-            t = mptime.gmtime(secs)
-            # (year, month, day, weekday, hours, minutes, seconds, subseconds)
-            sub_us = clock.epoch_us() % 1_000_000
-            return (t[0], t[1], t[2], t[6], t[3], t[4], t[5], sub_us)
-        year, month, day, _wd, hours, minutes, seconds, sub = dt
-        secs = mptime.mktime((year, month, day, hours, minutes, seconds, 0, 0, 0))
-        board.rtc_datetime = dt
-        clock.set_epoch_ms(secs * 1000 + sub // 1000)
-        return None
-
-    def init(self, dt):
-        self.datetime(dt)
-
-
 class UART:
     def __init__(self, id, baudrate=115200, **kwargs):
         self._id = id
@@ -499,52 +400,3 @@ class SPI:
 
 
 SoftSPI = SPI
-
-
-def time_pulse_us(pin, pulse_level, timeout_us=1_000_000):
-    width = board.pulses_us.get(_pin_id(pin), -1)
-    mptime.sleep_us(width if width > 0 else timeout_us)
-    return width
-
-
-def bitstream(pin, encoding, timing, data):
-    board.bitstreams.append((_pin_id(pin), tuple(timing), bytes(data)))
-
-
-def freq(hz=None):
-    return 240_000_000 if hz is None else None
-
-
-def unique_id():
-    return b"\x24\x0a\xc4\x00\x11\x22"
-
-
-def reset():
-    board.resets += 1
-
-
-def soft_reset():
-    board.resets += 1
-
-
-def idle():
-    mptime.sleep_us(100)
-
-
-def disable_irq():
-    return 0
-
-
-def enable_irq(state=0):
-    pass
-
-
-def reset_cause():
-    return 1
-
-
-PWRON_RESET = 1
-HARD_RESET = 2
-WDT_RESET = 3
-DEEPSLEEP_RESET = 4
-SOFT_RESET = 5
