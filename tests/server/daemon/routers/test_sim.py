@@ -242,3 +242,29 @@ def test_runaway_programs_end_as_their_runs_outcome_and_the_daemon_goes_on(daemo
         "fork.py": "error",
         "straight.py": "finished",
     }
+
+
+@pytest.mark.e2e
+def test_a_daemon_that_shuts_down_stops_its_live_runs_and_records_them(tmp_path):
+    from openbricks_server.daemon.store import Store
+
+    from ..conftest import start_daemon
+
+    daemon = start_daemon(tmp_path / "data")
+    try:
+        with daemon.client() as client:
+            save(client, "ticker.py", TICKER)
+            run = start(client, program="ticker.py", speed=1.0, limit_ms=600_000)
+            wait_until(client, run["run_id"], lambda r: r["state"] == "running" and r["sim_ms"] > 0)
+            process = daemon.ctx.sim.live[run["run_id"]]._process
+    finally:
+        daemon.stop()
+    with pytest.raises(ProcessLookupError):
+        os.kill(process.pid, 0)
+    store = Store(daemon.config.db_path)
+    try:
+        row = store.sim_runs.get(run["run_id"])
+        assert row["state"] == "cancelled" and row["exit"] == "stopped" and row["recording"]
+        assert store.runs.get(run["run_id"])["outcome"] == "stopped"
+    finally:
+        store.close()
