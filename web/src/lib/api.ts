@@ -97,11 +97,12 @@ export async function request<T>(method: string, path: string, body?: unknown, t
   const timer = setTimeout(() => controller.abort(), timeoutMs);
   let response: Response;
   try {
+    const raw = body instanceof Blob;
     response = await fetch(url(path), {
       method,
       credentials: "same-origin",
-      headers: body === undefined ? {} : { "Content-Type": "application/json" },
-      body: body === undefined ? undefined : JSON.stringify(body),
+      headers: body === undefined ? {} : { "Content-Type": raw ? "application/octet-stream" : "application/json" },
+      body: body === undefined ? undefined : raw ? body : JSON.stringify(body),
       signal: controller.signal,
     });
   } catch (err) {
@@ -145,7 +146,9 @@ export function toApiError(status: number, payload: unknown, text = "", what = "
 
 export const api = {
   get: <T>(path: string) => request<T>("GET", path),
-  post: <T>(path: string, body?: unknown) => request<T>("POST", path, body ?? {}),
+  post: <T>(path: string, body?: unknown, timeoutMs?: number) => request<T>("POST", path, body ?? {}, timeoutMs),
+  /** A file as the request body (application/octet-stream), e.g. a firmware image. */
+  upload: <T>(path: string, file: Blob, timeoutMs = 120000) => request<T>("POST", path, file, timeoutMs),
   put: <T>(path: string, body?: unknown) => request<T>("PUT", path, body ?? {}),
   del: <T>(path: string) => request<T>("DELETE", path),
 };
