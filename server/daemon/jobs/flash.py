@@ -19,7 +19,10 @@ from pathlib import Path
 
 from ulid import ULID
 
+from openbricks_server.daemon.hubs.errors import HubOperationError
 from openbricks_server.daemon.jobs.registry import Job, JobFailed, JobRegistry
+from openbricks_server.errors import CliError
+from openbricks_server.flash.esptool_runner import Esptool
 from openbricks_server.flash.flasher import FlashRequest, flash_hub, older_version_refusal
 from openbricks_server.flash.image import FirmwareImage, inspect_bytes, inspect_image
 from openbricks_server.flash.ports import missing_port
@@ -36,6 +39,12 @@ class FlashTarget:
     port: str
     name: str
     actor: object | None = None  # the HubActor whose link goes through `port`, if the console holds one
+
+
+def hubs_by_port(hubs) -> dict[str, object]:
+    """The console's hubs whose link goes through a serial port (USB hubs, virtual hubs' ptys), by port."""
+    actors = hubs.list() if hubs is not None else []
+    return {a.backend.serial_port: a for a in actors if a.backend.serial_port is not None}
 
 
 class _JobReport:
@@ -124,3 +133,27 @@ class FlashJobs:
                     target.actor.rename(result.hub_name)
             self.chips[target.port] = result.chip
             return asdict(result)
+
+    # -- probing ----------------------------------------------------------------------------------------
+
+    async def probe(self, targets: list[FlashTarget], who: str) -> list[dict]:
+        """The chip on each port, asked of esptool (which resets the board into its bootloader and back):
+        one `{"port", "chip", "error"}` per port, probed together; a port that fails says why."""
+
+        async def one(target: FlashTarget) -> dict:
+            async with self._slots:
+                try:
+                    problem = await asyncio.to_thread(missing_port, target.port)
+                    if problem:
+                        return {"port": target.port, "chip": None, "error": f"{target.port}: {problem}"}
+                    if target.actor is None:
+                        chip = await Esptool(target.port).probe_chip()
+                    else:
+                        async with target.actor.handed_over("chip probe", who):
+                            chip = await Esptool(target.port).probe_chip()
+                except (CliError, HubOperationError) as exc:
+                    return {"port": target.port, "chip": None, "error": str(exc)}
+            self.chips[target.port] = chip
+            return {"port": target.port, "chip": chip, "error": None}
+
+        return list(await asyncio.gather(*(one(target) for target in targets)))

@@ -17,7 +17,7 @@ from pydantic import BaseModel, Field
 from openbricks_server.daemon.auth import Caller, require_operator, require_viewer
 from openbricks_server.daemon.errors import ApiError
 from openbricks_server.daemon.hubs.errors import HubOperationError
-from openbricks_server.daemon.jobs.flash import MAX_FIRMWARE_BYTES, FlashTarget
+from openbricks_server.daemon.jobs.flash import MAX_FIRMWARE_BYTES, FlashTarget, hubs_by_port
 from openbricks_server.daemon.routers.jobs import JobOut, JobRef, WaitQuery, find_job, registry
 from openbricks_server.errors import CliError
 from openbricks_server.flash.flasher import validate_hub_name
@@ -71,7 +71,7 @@ def _flash(request: Request):
 def _targets(request: Request, body: FlashBody) -> list[FlashTarget]:
     """The request's boards, resolved and checked as a whole (a malformed request starts nothing)."""
     hubs = request.app.state.ctx.hubs
-    by_port = {a.backend.serial_port: a for a in (hubs.list() if hubs else []) if a.backend.serial_port}
+    by_port = hubs_by_port(hubs)
     targets, ports, names = [], set(), set()
     for i, target in enumerate(body.targets):
         where = f"targets[{i}]"

@@ -6,9 +6,10 @@ from __future__ import annotations
 import asyncio
 
 from fastapi import APIRouter, Depends, Request
-from pydantic import BaseModel
+from pydantic import BaseModel, Field
 
-from openbricks_server.daemon.auth import require_viewer
+from openbricks_server.daemon.auth import Caller, require_operator, require_viewer
+from openbricks_server.daemon.errors import ApiError
 
 router = APIRouter(prefix="/serial", tags=["serial"], dependencies=[Depends(require_viewer)])
 
@@ -70,3 +71,32 @@ async def list_ports(request: Request) -> SerialPorts:
                 )
             )
     return SerialPorts(ports=sorted(out, key=lambda p: p.port))
+
+
+class ProbeBody(BaseModel):
+    ports: list[str] = Field(min_length=1, max_length=64, description="serial ports to ask esptool about")
+
+
+class ProbedPort(BaseModel):
+    port: str
+    chip: str | None  # esp32 / esp32s3
+    error: str | None  # why this port could not be probed
+
+
+class Probed(BaseModel):
+    ports: list[ProbedPort]
+
+
+@router.post("/probe", response_model=Probed)
+async def probe(body: ProbeBody, request: Request, caller: Caller = Depends(require_operator)) -> Probed:
+    """Ask esptool which chip is on each port, all at once (each board is reset into its bootloader and
+    back; a USB hub the console holds is let go of meanwhile). GET /api/serial/ports shows the chips."""
+    from openbricks_server.daemon.jobs.flash import FlashTarget, hubs_by_port
+
+    ctx = request.app.state.ctx
+    if ctx.flash is None:
+        raise ApiError(503, "flash_unavailable", "flashing is not running", "restart the console")
+    ports = list(dict.fromkeys(p.strip() for p in body.ports))
+    by_port = hubs_by_port(ctx.hubs)
+    targets = [FlashTarget(port, "", by_port.get(port)) for port in ports]
+    return Probed(ports=[ProbedPort(**found) for found in await ctx.flash.probe(targets, caller.label)])

@@ -52,7 +52,9 @@ def upload(client, chip="esp32s3", version="2.8.0", filename="firmware.bin") -> 
 
 def wait_jobs(client, jobs) -> dict[str, dict]:
     return {
-        job["job_id"]: client.get(f"/api/flash/{job['job_id']}", params={"wait_s": JOB_TIMEOUT_S}).json()
+        job["job_id"]: client.get(
+            f"/api/flash/{job['job_id']}", params={"wait_s": JOB_TIMEOUT_S}, timeout=JOB_TIMEOUT_S + 30
+        ).json()
         for job in jobs
     }
 
@@ -204,3 +206,14 @@ def wait_status(client, hub_id, status, timeout_s=60):
             return hub
         time.sleep(0.1)
     raise AssertionError(f"{hub_id} is {hub['status']}, not {status}: {hub}")
+
+
+def test_probing_asks_esptool_for_each_ports_chip_at_once(daemon, boards, fake_esptool, tmp_path):
+    with daemon.client() as client:
+        ports = [boards[2].pty, boards[3].pty, str(tmp_path / "ttyUSB9")]
+        probed = client.post("/api/serial/probe", json={"ports": ports})
+        assert probed.status_code == 200, probed.text
+        found = {p["port"]: (p["chip"], p["error"]) for p in probed.json()["ports"]}
+        assert found[boards[2].pty] == ("esp32s3", None) and found[boards[3].pty] == ("esp32s3", None)
+        assert found[ports[2]][0] is None and "there is no such port" in found[ports[2]][1]
+    assert fake_esptool.commands() == ["chip-id", "chip-id"]

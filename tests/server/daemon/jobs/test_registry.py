@@ -1,0 +1,113 @@
+"""The job registry with a real store and event bus: a job's life as a client sees it (events and the
+stored row), failures in the user's words, progress only on whole percents, and what a restart or a
+shutdown leaves behind."""
+
+from __future__ import annotations
+
+import asyncio
+import json
+
+from openbricks_server.daemon.events import EventBus
+from openbricks_server.daemon.jobs.registry import JobFailed, JobRegistry
+from openbricks_server.daemon.store import Store
+from openbricks_server.daemon.store.jobs import INTERRUPTED
+from openbricks_server.errors import CliError
+
+
+def _registry(path):
+    store = Store(path / "console.sqlite3")
+    bus = EventBus(store, "boot", store.events.begin_boot("boot"), 1000, 100)
+    subscriber, _ = bus.subscribe()
+    return store, JobRegistry(store, bus), subscriber
+
+
+def _events(subscriber) -> list[tuple[str, dict]]:
+    out = []
+    while not subscriber.queue.empty():
+        event = json.loads(subscriber.queue.get_nowait()[1])
+        out.append((event["type"], event["data"]))
+    return out
+
+
+def test_a_job_is_announced_stored_and_finished_with_its_result(tmp_path):
+    async def main():
+        store, jobs, subscriber = _registry(tmp_path)
+
+        async def work(job):
+            jobs.running(job)
+            jobs.step(job, "write the firmware")
+            for percent in (0.0, 0.4, 10.0, 10.9, 55.5, 100.0):
+                jobs.progress(job, percent)
+            return {"hub_name": "RobotA"}
+
+        job = jobs.create("flash", "/dev/ttyUSB0", "local", {"port": "/dev/ttyUSB0"}, batch="b1")
+        await jobs.start(job, work)
+        events = _events(subscriber)
+        states = [data["state"] for kind, data in events if kind == "job"]
+        assert states == ["queued", "running", "running", "done"]
+        assert [data["progress"] for kind, data in events if kind == "job_progress"] == [
+            0.0,
+            10.0,
+            55.5,
+            100.0,
+        ]
+        stored = store.jobs.get(job.job_id)
+        assert stored["state"] == "done" and stored["result"] == {"hub_name": "RobotA"}
+        assert stored["steps"] == ["write the firmware"] and stored["batch"] == "b1"
+        assert jobs.list("flash", "b1")[0]["job_id"] == job.job_id and jobs.list("servo_scan") == []
+        store.close()
+
+    asyncio.run(main())
+
+
+def test_failures_keep_the_users_words_and_a_bug_fails_only_its_job(tmp_path):
+    async def main():
+        store, jobs, _ = _registry(tmp_path)
+        reasons = {
+            "cli": CliError("esptool failed probing the chip on /dev/ttyUSB0: no answer"),
+            "job": JobFailed("/dev/ttyUSB9: there is no such port"),
+            "bug": ZeroDivisionError("division by zero"),
+        }
+        started = {}
+        for name, exc in reasons.items():
+
+            async def work(job, exc=exc):
+                raise exc
+
+            started[name] = jobs.create("flash", name, "local", {})
+            await jobs.start(started[name], work)
+        got = {name: store.jobs.get(job.job_id) for name, job in started.items()}
+        assert {g["state"] for g in got.values()} == {"failed"}
+        assert got["cli"]["message"] == "esptool failed probing the chip on /dev/ttyUSB0: no answer"
+        assert got["job"]["message"] == "/dev/ttyUSB9: there is no such port"
+        assert got["bug"]["message"].startswith("unexpected error (ZeroDivisionError: division by zero)")
+        store.close()
+
+    asyncio.run(main())
+
+
+def test_shutdown_cancels_running_jobs_and_a_restart_marks_unfinished_ones(tmp_path):
+    async def main():
+        store, jobs, _ = _registry(tmp_path)
+
+        async def forever(job):
+            jobs.running(job)
+            await asyncio.sleep(3600)
+
+        job = jobs.create("flash", "/dev/ttyUSB0", "local", {})
+        jobs.start(job, forever)
+        await asyncio.sleep(0.05)
+        waiting = asyncio.create_task(jobs.wait(job.job_id, 30))
+        await jobs.close()
+        await waiting
+        assert store.jobs.get(job.job_id)["state"] == "cancelled"
+        left = jobs.create("flash", "/dev/ttyUSB1", "local", {})  # never started: as after a kill -9
+        store.close()
+        return left.job_id
+
+    left = asyncio.run(main())
+    store = Store(tmp_path / "console.sqlite3")
+    assert store.jobs.mark_interrupted() == 1
+    row = store.jobs.get(left)
+    assert row["state"] == "failed" and row["message"] == INTERRUPTED
+    store.close()
