@@ -351,8 +351,9 @@ class ServoBus:
 class BusEngine:
     """The serial-bus engine a DriveBase hands its wheels to (`_openbricks_native.serial_bus(uart_id)`).
 
-    The contract is the C engine's (docs/architecture.md); this class only moves each servo onto the
-    engine's wire when it is adopted, and back to the register emulation when it is released.
+    The contract is the C engine's (docs/architecture.md), whose methods it passes through; this
+    class only moves each servo onto the engine's wire when it is adopted, and back to the register
+    emulation when it is released.
     """
 
     def __init__(self, bus, wire):
@@ -381,20 +382,7 @@ class BusEngine:
         self._engine.release(slot)
         self._servos.pop(slot).take_back()
 
-    def motor_io(self, slot):
-        return self._engine.motor_io(slot)
-
-    def angle_deg(self, slot):
-        return self._engine.angle_deg(slot)
-
-    def speed_dps(self, slot):
-        return self._engine.speed_dps(slot)
-
-    def load_pct(self, slot):
-        return self._engine.load_pct(slot)
-
-    def stats(self, slot):
-        return self._engine.stats(slot)
-
-    def bus_stats(self):
-        return self._engine.bus_stats()
+    def __getattr__(self, name):
+        # Everything else is the C engine's own: motor_io, angle_deg, speed_dps, load_pct, stats,
+        # bus_stats, the slots' moves and flags (st_move_core), set_drive.
+        return getattr(self._engine, name)

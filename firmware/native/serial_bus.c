@@ -227,6 +227,23 @@ ob_serial_bus_error_t ob_serial_bus_adopt(ob_serial_bus_t *bus, int servo_id, bo
     return OB_SERIAL_BUS_OK;
 }
 
+ob_serial_bus_error_t ob_serial_bus_set_drive(ob_serial_bus_t *bus, int index, bool wheel_mode, float max_dps) {
+    ob_serial_bus_slot_t *slot = ob_serial_bus_slot(bus, index);
+    if (slot == NULL) {
+        return OB_SERIAL_BUS_E_SLOT;
+    }
+    const uint8_t mode = wheel_mode ? MODE_WHEEL : MODE_DUTY;
+    static const uint8_t zero[2] = {0u, 0u};
+    /* The new mode's goal register starts at rest: the servo must not jump to a stale one. */
+    if (!write_register(bus, slot->servo_id, wheel_mode ? OB_SCS_REG_GOAL_SPEED : REG_GOAL_TIME, zero, sizeof(zero)) ||
+        !write_register(bus, slot->servo_id, OB_SCS_REG_MODE, &mode, 1)) {
+        return OB_SERIAL_BUS_E_SILENT;
+    }
+    slot->wheel_mode = wheel_mode;
+    slot->wheel_max_dps = max_dps > 0.0f ? max_dps : 0.0f;
+    return OB_SERIAL_BUS_OK;
+}
+
 ob_serial_bus_error_t ob_serial_bus_release(ob_serial_bus_t *bus, int index) {
     ob_serial_bus_slot_t *slot = ob_serial_bus_slot(bus, index);
     if (slot == NULL) {
@@ -346,22 +363,35 @@ static void sync_write(ob_serial_bus_t *bus, uint8_t reg, uint8_t width, const u
     (void)send(bus, packet, n); /* nobody answers a sync write */
 }
 
-static void send_commands(ob_serial_bus_t *bus) {
+/* One sync write of the driven slots in one drive mode: duties (goal time) or wheel speeds (goal speed). */
+static void send_goals(ob_serial_bus_t *bus, bool wheel_mode) {
     uint8_t ids[OB_SERIAL_BUS_MAX_SLOTS];
     uint8_t data[OB_SERIAL_BUS_MAX_SLOTS * 2];
     size_t count = 0;
     for (int i = 0; i < bus->n_slots; i++) {
         const ob_serial_bus_slot_t *slot = &bus->slots[i];
-        if (slot->adopted && slot->driven) {
-            float servo_duty = slot->sign * slot->duty_pct * 10.0f;
+        if (slot->adopted && slot->driven && slot->wheel_mode == wheel_mode) {
             ids[count] = slot->servo_id;
-            ob_scs_put_u16(&data[2 * count], ob_scs_sm_encode((int32_t)lroundf(servo_duty), DUTY_SIGN_BIT));
+            if (wheel_mode) {
+                float steps = slot->sign * slot->duty_pct * 0.01f * slot->wheel_max_dps / DEG_PER_COUNT;
+                ob_scs_put_u16(&data[2 * count], ob_scs_sm_encode((int32_t)lroundf(steps), OB_SCS_SPEED_SIGN_BIT));
+            } else {
+                float servo_duty = slot->sign * slot->duty_pct * 10.0f;
+                ob_scs_put_u16(&data[2 * count], ob_scs_sm_encode((int32_t)lroundf(servo_duty), DUTY_SIGN_BIT));
+            }
             count++;
         }
     }
-    /* Duties first: a servo switched on below starts on its new duty, not a stale one. */
-    sync_write(bus, REG_GOAL_TIME, 2, ids, data, count);
-    count = 0;
+    sync_write(bus, wheel_mode ? OB_SCS_REG_GOAL_SPEED : REG_GOAL_TIME, 2, ids, data, count);
+}
+
+static void send_commands(ob_serial_bus_t *bus) {
+    uint8_t ids[OB_SERIAL_BUS_MAX_SLOTS];
+    uint8_t data[OB_SERIAL_BUS_MAX_SLOTS * 2];
+    size_t count = 0;
+    send_goals(bus, false);
+    send_goals(bus, true);
+    /* Goals first: a servo switched on below starts on its new goal, not a stale one. */
     for (int i = 0; i < bus->n_slots; i++) {
         ob_serial_bus_slot_t *slot = &bus->slots[i];
         if (slot->adopted && (!slot->torque_known || slot->torque_on != slot->driven)) {

@@ -78,6 +78,9 @@ typedef struct {
     /* What the next tick sends. */
     bool driven;    /* torque on, at duty_pct; false: coasting */
     float duty_pct; /* user frame, -100..100 */
+    /* drive="wheel": the servo's own speed loop (wheel mode) runs duty_pct of wheel_max_dps. */
+    bool wheel_mode;
+    float wheel_max_dps;
     /* What the servo was told last (torque enable). */
     bool torque_known;
     bool torque_on;
@@ -120,6 +123,14 @@ void ob_serial_bus_init(ob_serial_bus_t *bus, const ob_uart_t *uart, uint32_t ba
  * its slot number and the servo coasts until its IO is driven.
  */
 ob_serial_bus_error_t ob_serial_bus_adopt(ob_serial_bus_t *bus, int servo_id, bool invert, int *slot);
+
+/*
+ * How the slot's duty reaches the servo: drive="duty" (wheel_mode false, the
+ * default: open-loop duty mode, the engine's controllers close the loop) or
+ * drive="wheel" (the servo's internal speed controller in wheel mode, asked
+ * for duty_pct of max_dps). Switches the servo's mode at once.
+ */
+ob_serial_bus_error_t ob_serial_bus_set_drive(ob_serial_bus_t *bus, int slot, bool wheel_mode, float max_dps);
 
 /* Coast the servo, switch it back to wheel mode and free its slot (the number is not reused). */
 ob_serial_bus_error_t ob_serial_bus_release(ob_serial_bus_t *bus, int slot);

@@ -39,7 +39,9 @@ class DriveBase:
     `left` and `right` are two motors of one family: serial-bus servos (adopted onto the bus
     engine), encoder motors (on the native controller), or open-loop bridges (drive()/stop() only).
     `imu` is a heading source for use_gyro(True). `drive` selects how adopted serial-bus wheels are
-    actuated; "duty" (the engine closes the loop over raw duty) is the one this runtime implements.
+    actuated: "duty" (default: open-loop duty, every layer of the drive loop is openbricks code) or
+    "wheel" (the servos' own speed controller in wheel mode, asked for the controller's share of
+    each motor's max_dps).
     """
 
     def __init__(self, left, right, wheel_diameter_mm, axle_track_mm, imu=None, drive="duty"):
@@ -51,10 +53,10 @@ class DriveBase:
                 or value == float("inf")
             ):
                 raise ValueError("DriveBase(%s=%r): give the measured size in mm, > 0" % (name, value))
-        if drive != "duty":
+        if drive not in ("duty", "wheel"):
             raise ValueError(
-                "DriveBase(drive=%r): this runtime's bus engine drives the wheels in duty mode only; "
-                "use drive='duty' (the default)" % (drive,)
+                "DriveBase(drive=%r): give 'duty' (the default: the engine closes the loop over raw duty) "
+                "or 'wheel' (the servos' own speed controller)" % (drive,)
             )
         if imu is not None and not callable(getattr(imu, "heading", None)):
             raise TypeError("DriveBase(imu=%r): an IMU needs a heading() method" % (imu,))
@@ -63,7 +65,7 @@ class DriveBase:
         self.wheel_diameter_mm = float(wheel_diameter_mm)
         self.axle_track_mm = float(axle_track_mm)
         self.imu = imu
-        self._pair = pair_for(left, right)
+        self._pair = pair_for(left, right, drive)
         self._gyro = False
         self._heading = _UnwrappedHeading(imu) if imu is not None else None
         self._controller = None

@@ -48,8 +48,10 @@ def _is_encoder_motor(motor):
     return callable(getattr(motor, "give_to_drivebase", None)) and getattr(motor, "closed_loop", False)
 
 
-def pair_for(left, right):
-    """The pair class that fits `left` and `right`, built; raises when they cannot share a chassis."""
+def pair_for(left, right, drive="duty"):
+    """The pair class that fits `left` and `right`, built; raises when they cannot share a chassis.
+
+    `drive` ("duty" or "wheel") is how serial-bus wheels are actuated; other motors have one way."""
     for side, motor in (("left", left), ("right", right)):
         for method in ("dc", "brake", "coast"):
             if not callable(getattr(motor, method, None)):
@@ -69,8 +71,14 @@ def pair_for(left, right):
             "kind of feedback to be driven as one chassis"
             % (type(left).__name__, _KIND_PHRASES[kinds[0]], type(right).__name__, _KIND_PHRASES[kinds[1]])
         )
+    if drive != "duty" and kinds[0] != "serial-bus":
+        raise ValueError(
+            "DriveBase(drive=%r) selects the serial-bus servos' own speed controller; %s / %s: each is %s, "
+            "with none of its own; leave drive at 'duty'"
+            % (drive, type(left).__name__, type(right).__name__, _KIND_PHRASES[kinds[0]])
+        )
     if kinds[0] == "serial-bus":
-        return SerialBusPair(left, right)
+        return SerialBusPair(left, right, drive)
     if kinds[0] == "encoder":
         return EncoderPair(left, right)
     return OpenLoopPair(left, right)
@@ -160,7 +168,7 @@ class SerialBusPair(_Pair):
 
     kind = "serial-bus"
 
-    def __init__(self, left, right):
+    def __init__(self, left, right, drive="duty"):
         _Pair.__init__(self, left, right)
         serial_bus = _engine_factory(left)
         for i, side in enumerate(SIDES):
@@ -178,6 +186,8 @@ class SerialBusPair(_Pair):
             type(motor).migrate_bus_to_native(motor.bus, skip=self.motors)
         for i, side in enumerate(SIDES):
             self.motors[i].set_label(side + " wheel", self.wheels[i][1])
+            port, slot = self.wheels[i]
+            port.engine.set_drive(slot, drive, self.motors[i].max_dps)
         self._await_first_readings()
         self.check()
 

@@ -13,7 +13,9 @@
  * firmware in open-loop duty mode over a simulated wheel (its WheelIO in the
  * servo's shaft frame). They answer PING, the 6-byte feedback READ (present
  * position as the multi-turn sign-magnitude window, speed, load), WRITE and
- * SYNC WRITE of torque enable, mode and the duty (goal time) registers. A
+ * SYNC WRITE of torque enable, mode, the duty (goal time) and, for
+ * drive="wheel", the goal speed register (wheel mode: the servo's own speed
+ * loop, modelled as feed-forward plus a proportional term). A
  * servo can be made silent (an unplugged cable). Servos not adopted are
  * answered by the Python register emulation (sim/serial_bus.py) instead,
  * through the shim's machine.UART; adoption moves a servo onto this wire.
@@ -32,7 +34,12 @@
 #define MULTI_TURN_SPAN 65535
 #define REG_MIN_ANGLE 0x09u
 #define REG_GOAL_TIME 0x2Cu
+#define MODE_WHEEL 1u
 #define MODE_DUTY 2u
+/* Wheel mode (drive="wheel"): the servo's own speed loop, feed-forward over its no-load speed
+ * plus a proportional term, updated with every packet the engine sends (each tick). */
+#define WHEEL_NO_LOAD_DPS 888.0
+#define WHEEL_KP_PCT_PER_DPS 0.3
 /* An ST-3032 starts its reply this long after the request's last byte (firmware latency). */
 #define DEFAULT_RETURN_DELAY_US 20u
 
@@ -44,6 +51,7 @@ typedef struct {
     uint8_t mode;
     int torque_on;
     uint16_t duty_raw; /* goal time register: 0.1 %, sign in bit 10 */
+    uint16_t speed_raw; /* goal speed register: steps/s, sign in bit 15 */
 } servo_t;
 
 typedef struct {
@@ -87,7 +95,16 @@ static void apply(servo_t *servo) {
         io->write_coast(io->ctx);
         return;
     }
-    float duty = servo->mode == MODE_DUTY ? (float)ob_scs_sm_decode(servo->duty_raw, 10) / 10.0f : 0.0f;
+    float duty = 0.0f;
+    if (servo->mode == MODE_DUTY) {
+        duty = (float)ob_scs_sm_decode(servo->duty_raw, 10) / 10.0f;
+    } else if (servo->mode == MODE_WHEEL) {
+        const WheelIOObject *wheel = servo->wheel;
+        double goal_dps = ob_scs_sm_decode(servo->speed_raw, OB_SCS_SPEED_SIGN_BIT) * (360.0 / COUNTS_PER_REV);
+        double speed_dps = wheel->sign * *wheel->wheel->qvel * RAD_TO_DEG;
+        double pct = 100.0 * goal_dps / WHEEL_NO_LOAD_DPS + WHEEL_KP_PCT_PER_DPS * (goal_dps - speed_dps);
+        duty = (float)(pct > 100.0 ? 100.0 : pct < -100.0 ? -100.0 : pct);
+    }
     io->write_duty(io->ctx, duty);
 }
 
@@ -106,6 +123,12 @@ static void write_registers(servo_t *servo, uint8_t address, const uint8_t *data
             touched = 1;
         } else if (reg == REG_GOAL_TIME + 1u) {
             servo->duty_raw = (uint16_t)((servo->duty_raw & 0x00FFu) | ((unsigned)data[i] << 8));
+            touched = 1;
+        } else if (reg == OB_SCS_REG_GOAL_SPEED) {
+            servo->speed_raw = (uint16_t)((servo->speed_raw & 0xFF00u) | data[i]);
+            touched = 1;
+        } else if (reg == OB_SCS_REG_GOAL_SPEED + 1u) {
+            servo->speed_raw = (uint16_t)((servo->speed_raw & 0x00FFu) | ((unsigned)data[i] << 8));
             touched = 1;
         }
     }

@@ -99,6 +99,38 @@ def test_an_adopted_pair_runs_a_native_drivebase_from_the_bus_engine(sim):
     assert replies >= 3000 and failed == 0 and in_a_row == 0
 
 
+def test_drive_wheel_runs_the_simulated_servos_own_speed_loop_and_lands_the_moves(sim):
+    from openbricks.robotics import DriveBase
+
+    left, right = motors()
+    db = DriveBase(left, right, wheel_diameter_mm=88, axle_track_mm=138, drive="wheel")
+    db.straight(300)
+    pose = sim.physics.pose()
+    assert pose.x_mm == pytest.approx(300, abs=3.0)
+    db.turn(90)
+    assert sim.physics.pose().heading_deg == pytest.approx(90, abs=1.5)
+
+
+def test_adopted_wheels_run_angle_and_hold_on_the_engines_own_slot_core(sim):
+    import time
+
+    from openbricks.robotics import DriveBase
+
+    left, right = motors()
+    db = DriveBase(left, right, wheel_diameter_mm=88, axle_track_mm=138)
+    db.straight(100)
+    start = left.angle()
+    left.run_angle(360, 360)  # the drive base lets go; st_move_core runs the move on the tick
+    assert left.done()
+    assert left.angle() - start == pytest.approx(360, abs=3.0)
+    right.hold()
+    held = right.angle()
+    time.sleep_ms(300)
+    assert right.angle() == pytest.approx(held, abs=1.0)
+    db.straight(100)  # and the drive base takes both wheels back
+    assert db.done()
+
+
 def test_the_engine_speaks_scs_packets_on_the_wire_with_real_byte_timing(sim):
     import _openbricks_native
 

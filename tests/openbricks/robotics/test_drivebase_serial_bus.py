@@ -297,3 +297,42 @@ def test_the_stall_flag_of_an_adopted_wheel_comes_from_the_engine():
     assert robot.left.stalled()
     robot.servos[0].unblock()
     robot.left.coast()
+
+
+def test_drive_wheel_runs_the_servos_own_speed_loop_and_still_lands_its_moves():
+    from openbricks.robotics import DriveBase
+    from tests.openbricks.robotics.robots import SERVO_TRACK_MM
+
+    robot = ServoRobot()
+    db = DriveBase(
+        robot.left, robot.right, wheel_diameter_mm=SERVO_WHEEL_MM, axle_track_mm=SERVO_TRACK_MM, drive="wheel"
+    )
+    assert [servo.mode for servo in robot.servos] == [1, 1]  # wheel mode: the servo's speed controller
+    db.straight(300)
+    assert approx(robot.chassis.x_mm, 300, 3)
+    db.turn(90)
+    assert approx(robot.chassis.heading_deg, 90, 1.5)
+
+
+def test_drive_must_be_duty_or_wheel_and_wheel_needs_serial_bus_servos():
+    from openbricks.robotics import DriveBase
+    from tests.openbricks.robotics.robots import SERVO_TRACK_MM
+
+    robot = ServoRobot()
+    with raises(ValueError, "DriveBase(drive='speed'): give 'duty' (the default"):
+        DriveBase(
+            robot.left,
+            robot.right,
+            wheel_diameter_mm=SERVO_WHEEL_MM,
+            axle_track_mm=SERVO_TRACK_MM,
+            drive="speed",
+        )
+
+
+def test_drive_wheel_on_encoder_motors_says_they_have_no_speed_controller_of_their_own():
+    from openbricks.robotics import DriveBase
+    from tests.openbricks.robotics.robots import EncoderRobot
+
+    robot = EncoderRobot()
+    with raises(ValueError, "selects the serial-bus servos' own speed controller; JGB37Motor / JGB37Motor"):
+        DriveBase(robot.left, robot.right, wheel_diameter_mm=56, axle_track_mm=120, drive="wheel")

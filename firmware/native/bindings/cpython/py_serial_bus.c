@@ -467,7 +467,41 @@ static PyObject *sb_stalled(SerialBusObject *self, PyObject *args, PyObject *kwa
     return PyBool_FromLong(ob_serial_bus_stalled(slot, load, speed));
 }
 
+static PyObject *sb_set_drive(SerialBusObject *self, PyObject *args, PyObject *kwargs) {
+    static char *kwlist[] = {"slot", "drive", "max_dps", NULL};
+    static const char *where = "SerialBus.set_drive";
+    PyObject *slot_in, *max_in = Py_None;
+    const char *drive;
+    int index;
+    if (!PyArg_ParseTupleAndKeywords(args, kwargs, "Os|O:set_drive", kwlist, &slot_in, &drive, &max_in) ||
+        slot_arg(self, slot_in, &index) == NULL) {
+        return NULL;
+    }
+    bool wheel = strcmp(drive, "wheel") == 0;
+    if (!wheel && strcmp(drive, "duty") != 0) {
+        PyErr_Format(PyExc_ValueError, "%s(drive='%s'): give \"duty\" (the engine closes the loop over raw duty) or "
+                     "\"wheel\" (the servo's own speed controller)", where, drive);
+        return NULL;
+    }
+    float max_dps = 0.0f;
+    if (wheel && ob_py_positive_float(max_in, where, "max_dps", &max_dps) < 0) {
+        return NULL;
+    }
+    ob_serial_bus_error_t error = ob_serial_bus_set_drive(&self->bus, index, wheel, max_dps);
+    if (raise_stashed(self) < 0) {
+        return NULL;
+    }
+    if (error != OB_SERIAL_BUS_OK) {
+        PyErr_Format(PyExc_OSError, "%s: servo id %d is %s", where, (int)self->bus.slots[index].servo_id,
+                     ob_serial_bus_strerror(error));
+        return NULL;
+    }
+    Py_RETURN_NONE;
+}
+
 static PyMethodDef sb_methods[] = {
+    {"set_drive", (PyCFunction)(void (*)(void))sb_set_drive, METH_VARARGS | METH_KEYWORDS,
+     "set_drive(slot, drive, max_dps=None): 'duty' (open-loop duty) or 'wheel' (the servo's speed loop)."},
     {"move", (PyCFunction)(void (*)(void))sb_move, METH_VARARGS | METH_KEYWORDS,
      "move(slot, speed_dps, angle_deg, then='hold', accel_dps2=None): a position move by angle_deg on the tick."},
     {"hold", (PyCFunction)sb_hold, METH_O, "hold(slot): lock the shaft where it is, on the tick."},

@@ -373,7 +373,41 @@ static mp_obj_t serial_bus_stalled(size_t n_args, const mp_obj_t *pos_args, mp_m
 }
 static MP_DEFINE_CONST_FUN_OBJ_KW(serial_bus_stalled_obj, 2, serial_bus_stalled);
 
+static mp_obj_t serial_bus_set_drive(size_t n_args, const mp_obj_t *pos_args, mp_map_t *kw_args) {
+    enum { ARG_self, ARG_slot, ARG_drive, ARG_max_dps };
+    static const mp_arg_t allowed[] = {
+        {MP_QSTR_self, MP_ARG_REQUIRED | MP_ARG_OBJ, {.u_obj = MP_OBJ_NULL}},
+        {MP_QSTR_slot, MP_ARG_REQUIRED | MP_ARG_OBJ, {.u_obj = MP_OBJ_NULL}},
+        {MP_QSTR_drive, MP_ARG_REQUIRED | MP_ARG_OBJ, {.u_obj = MP_OBJ_NULL}},
+        {MP_QSTR_max_dps, MP_ARG_OBJ, {.u_obj = mp_const_none}},
+    };
+    static const char *where = "SerialBus.set_drive";
+    mp_arg_val_t args[MP_ARRAY_SIZE(allowed)];
+    mp_arg_parse_all(n_args, pos_args, kw_args, MP_ARRAY_SIZE(allowed), allowed, args);
+    serial_bus_obj_t *self = MP_OBJ_TO_PTR(args[ARG_self].u_obj);
+    int index;
+    ob_serial_bus_slot_t *slot = slot_arg(self, args[ARG_slot].u_obj, &index);
+    mp_obj_t drive = args[ARG_drive].u_obj;
+    bool wheel = mp_obj_is_str(drive) && strcmp(mp_obj_str_get_str(drive), "wheel") == 0;
+    if (!wheel && !(mp_obj_is_str(drive) && strcmp(mp_obj_str_get_str(drive), "duty") == 0)) {
+        mp_raise_msg_varg(&mp_type_ValueError,
+                          MP_ERROR_TEXT("%s(drive=%r): give \"duty\" (the engine closes the loop over raw duty) or "
+                                        "\"wheel\" (the servo's own speed controller)"),
+                          where, drive);
+    }
+    float max_dps = wheel ? ob_mp_positive_float(args[ARG_max_dps].u_obj, where, "max_dps") : 0.0f;
+    ob_serial_bus_error_t error = ob_serial_bus_set_drive(&self->bus, index, wheel, max_dps);
+    ob_mp_subscriber_raise(&self->sub);
+    if (error != OB_SERIAL_BUS_OK) {
+        mp_raise_msg_varg(&mp_type_OSError, MP_ERROR_TEXT("%s: servo id %d is %s"), where, (int)slot->servo_id,
+                          ob_serial_bus_strerror(error));
+    }
+    return mp_const_none;
+}
+static MP_DEFINE_CONST_FUN_OBJ_KW(serial_bus_set_drive_obj, 3, serial_bus_set_drive);
+
 static const mp_rom_map_elem_t serial_bus_locals_table[] = {
+    {MP_ROM_QSTR(MP_QSTR_set_drive), MP_ROM_PTR(&serial_bus_set_drive_obj)},
     {MP_ROM_QSTR(MP_QSTR_move), MP_ROM_PTR(&serial_bus_move_obj)},
     {MP_ROM_QSTR(MP_QSTR_hold), MP_ROM_PTR(&serial_bus_hold_obj)},
     {MP_ROM_QSTR(MP_QSTR_end_move), MP_ROM_PTR(&serial_bus_end_move_obj)},
