@@ -229,3 +229,10 @@ def test_telemetry_example_plots_a_rising_distance_and_reaches_its_600_mm(tmp_pa
     assert len(distances) > 10 and distances == sorted(distances)
     assert re.search(r"^plot: left_dps = [-0-9.]+$", result["output"], re.M)
     assert abs(result["pose"]["x_mm"] - 600.0) < 5.0
+
+
+def test_hub_led_example_colours_the_led_and_reads_the_released_button(tmp_path):
+    result = run_example(EXAMPLES / "hub_led.py", tmp_path)
+    assert re.findall(r"^LED (\w+)$", result["output"], re.M) == ["red", "green", "blue"]
+    assert "button held: False" in result["output"]
+    assert result["sim_ms"] >= 900  # three 300 ms waits
