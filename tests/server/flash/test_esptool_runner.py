@@ -1,6 +1,7 @@
 """esptool runs as a separate process; the chip and the write progress are read from its output."""
 
 import asyncio
+import os
 
 import pytest
 
@@ -41,3 +42,37 @@ def test_parsers_ignore_other_lines():
     assert parse_progress("Writing at 0x00010000 [====      ]  42.5% 1/2 bytes [00:01]") == 42.5
     assert parse_progress("Writing at 0x00010000... (7 %)") == 7.0
     assert parse_progress("Wrote 1000 bytes at 0x00010000 in 0.1 seconds (100 % done)") is None
+
+
+def _running_with(argument: str) -> list[int]:
+    """Processes whose command line contains `argument`."""
+    found = []
+    for entry in os.listdir("/proc"):
+        if entry.isdigit():
+            try:
+                with open(f"/proc/{entry}/cmdline", "rb") as f:
+                    if argument.encode() in f.read():
+                        found.append(int(entry))
+            except OSError:
+                pass
+    return found
+
+
+def test_a_cancelled_write_kills_its_esptool(tmp_path, fake_esptool, monkeypatch):
+    monkeypatch.setenv("FAKE_ESPTOOL_WRITE_S", "60")
+    image = tmp_path / "cancelled-firmware.bin"
+    image.write_bytes(b"\xe9" * 1000)
+
+    async def main():
+        started = asyncio.Event()
+        write = asyncio.create_task(
+            Esptool("/dev/ttyUSB7").write("esp32s3", 460800, 0, str(image), lambda _p: started.set())
+        )
+        await asyncio.wait_for(started.wait(), 30)
+        assert _running_with(str(image))
+        write.cancel()
+        with pytest.raises(asyncio.CancelledError):
+            await write
+
+    asyncio.run(main())
+    assert _running_with(str(image)) == []
