@@ -73,6 +73,18 @@ class Console:
         self.http.close()
 
 
+def hub_holding(info, port: str) -> str | None:
+    """The name of the console's hub whose link goes through serial port `port`, if it holds one."""
+    console = Console(info)
+    try:
+        ports = console.call("GET", "/serial/ports")["ports"]
+    except CliError:
+        return None  # an older console without the port list, or one going away: nothing to say
+    finally:
+        console.close()
+    return next((p["hub_name"] for p in ports if p["port"] == port and p["hub_id"]), None)
+
+
 def hub_path(name: str) -> str:
     return "/hubs/" + quote(name, safe="")
 

@@ -21,6 +21,19 @@ from openbricks_server.flash.image import inspect_image
 from openbricks_server.flash.ports import find_esp_port, missing_port
 
 
+def _check_console(port: str) -> None:
+    """Refuse a port whose hub a running console holds: two programs writing one port garble both."""
+    from openbricks_server import console_client
+
+    info = console_client.running()
+    held = console_client.hub_holding(info, port) if info is not None else None
+    if held is not None:
+        raise CliError(
+            f"the console ({info.url}) holds hub {held} on {port}: flash it from the console (its Flash "
+            "page, or POST /api/flash), or stop the console first"
+        )
+
+
 class _TerminalReport:
     """The flasher's steps as `==> step` lines, and the write as a progress bar."""
 
@@ -50,6 +63,7 @@ def main(args) -> int:
     if problem:
         raise CliError(f"--port {args.port}: {problem}")
     port = args.port or find_esp_port()
+    _check_console(port)
     steps.step(f"port {port}" + ("" if args.port else " (the only ESP device connected)"))
     request = FlashRequest(
         port=port,
