@@ -30,7 +30,6 @@ from dataclasses import replace
 
 from .job import ERROR, SimJob, SimResult
 from .limits import contain
-from .run import ProgramRun
 
 TELEMETRY_MS = 100  # one pose and wheel-speed sample per this much simulated time
 
@@ -119,50 +118,33 @@ def _read_controls(viewer, events: EventChannel, gone: threading.Event) -> None:
 
 def run_watched(job: SimJob, recording: str, events: EventChannel) -> SimResult:
     """Run `job` with its 3D view served and recorded, reporting to `events` as it goes."""
-    from .program_robot import infer_chassis
+    from .run import with_source
     from .run_flash import prepare_hub_dir
-    from .simulation import Simulation
     from .viewer import SimViewer
+    from .viewer.session import watched_run
 
-    with open(job.program, encoding="utf-8") as f:
-        source = f.read()
-    if job.chassis is None:
-        job = replace(job, chassis=infer_chassis(source))
+    job, source = with_source(job)
     job = replace(job, hub_dir=prepare_hub_dir(job.hub_dir))
     with SimViewer(port=0, speed=job.speed, controls=False, record=True) as viewer:
         gone = threading.Event()
         threading.Thread(
             target=_read_controls, args=(viewer, events, gone), name="controls", daemon=True
         ).start()
-        simulation = Simulation.for_job(job, paced=False)  # the viewer paces it
-        result = None
-        try:
-            run = ProgramRun(simulation, job.hub_dir)
+
+        def echo(text):
+            viewer.write(text)
+            events.send("output", text=text[:OUTPUT_CHUNK_MAX])
+
+        def attached(simulation):
             simulation.clock.schedule(
                 _wheel_sampler(simulation, events), TELEMETRY_MS * 1000, TELEMETRY_MS * 1000
             )
-
-            def echo(text):
-                viewer.write(text)
-                events.send("output", text=text[:OUTPUT_CHUNK_MAX])
-
-            viewer.attach(simulation, stop=run.request_stop)
             # Ready once attached: a pause or a speed sent from now on applies to this run.
             events.send("ready", port=viewer.port, chassis=job.chassis)
             if gone.is_set():  # the daemon went away while the world was being built
                 viewer.request_stop()
-            try:
-                result = run.run(
-                    source,
-                    os.path.basename(job.program),
-                    job.wall_limit(watched=True),
-                    echo,
-                    {**job.to_dict(), "viewer": True},
-                )
-            finally:
-                viewer.detach(result)
-        finally:
-            simulation.close()
+
+        result = watched_run(viewer, job, source, echo, on_attached=attached)
         with open(recording, "wb") as f:
             f.write(viewer.recording())
     return result

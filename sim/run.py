@@ -237,17 +237,24 @@ def report(result, stream=None) -> None:
     stream.flush()
 
 
+def with_source(job: SimJob, source=None) -> tuple[SimJob, str]:
+    """(the job with its chassis resolved, the program's text): read from job.program unless given,
+    the build the program's motor drivers describe when the job names none."""
+    if source is None:
+        with open(job.program, encoding="utf-8") as f:
+            source = f.read()
+    if job.chassis is None:
+        job = replace(job, chassis=infer_chassis(source))
+    return job, source
+
+
 def run_job(job: SimJob, source=None, echo=None, watched=False) -> SimResult:
     """Run `job` in this process (only in a process of its own: the shim patches process-wide state).
 
     source: the program's text (None: read job.program). echo(text): live output. The chassis the
     program describes and the hub flash are resolved here and recorded in the result's job.
     """
-    if source is None:
-        with open(job.program, encoding="utf-8") as f:
-            source = f.read()
-    if job.chassis is None:
-        job = replace(job, chassis=infer_chassis(source))
+    job, source = with_source(job, source)
     job = replace(job, hub_dir=prepare_hub_dir(job.hub_dir))
     sim = Simulation.for_job(job)
     try:

@@ -12,11 +12,9 @@ import os
 import sys
 import time
 from collections.abc import Callable
-from dataclasses import replace
 
 from ..job import STOPPED, SimJob, SimResult
-from ..program_robot import infer_chassis
-from ..run import ProgramRun
+from ..run import ProgramRun, with_source
 from ..simulation import Simulation
 from .viewer import DEFAULT_HOST, DEFAULT_PORT, SimViewer
 
@@ -42,11 +40,7 @@ def serve_run(
     No wall-clock limit applies unless the job sets one: a paused or slowed run is meant to take
     long, and the page's Stop button ends a program that never lets simulated time pass.
     """
-    if source is None:
-        with open(job.program, encoding="utf-8") as f:
-            source = f.read()
-    if job.chassis is None:
-        job = replace(job, chassis=infer_chassis(source))
+    job, source = with_source(job, source)
     with SimViewer(host, port, speed=1.0 if job.speed is None else job.speed) as viewer:
         if on_ready is not None:
             on_ready(viewer.url)
@@ -57,7 +51,7 @@ def serve_run(
                 echo(text)
 
         while True:
-            result = _one_run(viewer, job, source, tee)
+            result = watched_run(viewer, job, source, tee)
             if on_result is not None:
                 on_result(result)
             if viewer.restart_requested.is_set():
@@ -74,14 +68,21 @@ def serve_run(
             viewer.output.clear()
 
 
-def _one_run(viewer, job, source, echo) -> SimResult:
-    """A fresh Simulation of the job, paced by the viewer (its clock runs unpaced)."""
+def watched_run(viewer, job, source, echo, on_attached=None) -> SimResult:
+    """One run of `job` shown and paced by `viewer`, in a fresh Simulation (its clock unpaced).
+
+    on_attached(simulation) runs once the viewer shows it, before the program starts (the
+    console's child sends telemetry and says it is ready from there). No wall-clock limit unless
+    the job sets one: a watched run may be paused at will.
+    """
     simulation = Simulation.for_job(job, paced=False)
     result = None
     try:
         run = ProgramRun(simulation, job.hub_dir)
         viewer.attach(simulation, stop=run.request_stop)
         try:
+            if on_attached is not None:
+                on_attached(simulation)
             result = run.run(
                 source,
                 os.path.basename(job.program),
