@@ -14,7 +14,7 @@ import time
 from benchmarks import Row
 from benchmarks._native_bench import run_c_benchmark
 
-CORES = ("drivebase", "trajectory", "observer", "servo")
+CORES = ("control", "drivebase", "trajectory", "observer", "servo")
 
 BINDING_TICKS = 200_000
 BINDING_ROUNDS = 5

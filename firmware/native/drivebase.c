@@ -24,7 +24,7 @@
 #define OB_DB_PINNED_MIN_MS 20u
 #define OB_DB_RELEASE_DPS 20.0f
 
-void ob_drivebase_default_gains(ob_drivebase_gains_t *g) {
+void ob_drivebase_default_gains(ob_control_gains_t *g) {
     /*
      * Feed-forward from the ST-3032 torque-speed line (888 deg/s no-load at
      * 100 %, ~33 ms mechanical time constant with half of a 1 kg robot on a
@@ -32,22 +32,14 @@ void ob_drivebase_default_gains(ob_drivebase_gains_t *g) {
      * poles near 40 rad/s with a damping ratio of about 0.8; the integrator
      * removes what the model misses (a weak wheel, a slope, a heavier robot).
      */
-    g->kp = 6.0f;
-    g->ki = 30.0f;
-    g->kd = 0.12f;
-    g->ff_speed = 100.0f / 888.0f;
-    g->ff_accel = 0.0037f;
-    g->ff_friction = 1.0f;
-    g->integral_rate_deg = 5.0f;
-    g->integral_max_pct = 40.0f;
-}
-
-static float clampf(float x, float lo, float hi) {
-    return x < lo ? lo : (x > hi ? hi : x);
-}
-
-static float signf(float x) {
-    return x > 0.0f ? 1.0f : (x < 0.0f ? -1.0f : 0.0f);
+    g->kp_pct_per_deg = 6.0f;
+    g->ki_pct_per_deg_s = 30.0f;
+    g->kd_pct_per_dps = 0.12f;
+    g->ff_pct_per_dps = 100.0f / 888.0f;
+    g->ff_pct_per_dps2 = 0.0037f;
+    g->ff_static_pct = 1.0f;
+    g->integral_band_deg = 5.0f;
+    g->integral_limit_pct = 40.0f;
 }
 
 static bool positive_finite(float x) {
@@ -76,29 +68,9 @@ static void set_output(ob_drivebase_t *db, bool coast, float duty_left, float du
     db->output.duty_pct[OB_DB_RIGHT] = coast ? 0.0f : duty_right;
 }
 
-/*
- * Hand wheel i its output through io. An unchanged output is not written
- * again: a drive base that is idle (coasting) or braked must not keep
- * re-asserting that on a wheel another controller may be driving meanwhile,
- * and on the hub every write is a Python call. force writes regardless.
- */
+/* Hand wheel i its output through io (only a change, unless forced: see ob_output_t). */
 static void write_wheel(ob_drivebase_t *db, int i, bool force) {
-    bool coast = db->output.coast[i];
-    float duty = db->output.duty_pct[i];
-    bool same = db->written_valid[i] && coast == db->written.coast[i] && (coast || duty == db->written.duty_pct[i]);
-    if (same && !force) {
-        return;
-    }
-    if (coast) {
-        if (db->io[i].write_coast != NULL) {
-            db->io[i].write_coast(db->io[i].ctx);
-        }
-    } else if (db->io[i].write_duty != NULL) {
-        db->io[i].write_duty(db->io[i].ctx, duty);
-    }
-    db->written.coast[i] = coast;
-    db->written.duty_pct[i] = duty;
-    db->written_valid[i] = true;
+    ob_output_write(&db->written[i], &db->io[i], db->output.coast[i], db->output.duty_pct[i], force);
 }
 
 /* Release both wheels now, from a command: the next tick would be up to a period late. */
@@ -140,6 +112,8 @@ bool ob_drivebase_init(ob_drivebase_t *db, const ob_motor_io_t *left, const ob_m
     }
     ob_drivebase_default_gains(&db->sum.gains);
     ob_drivebase_default_gains(&db->diff.gains);
+    ob_integrator_set_limit(&db->sum.integrator, &db->sum.gains, OB_DB_MAX_DUTY);
+    ob_integrator_set_limit(&db->diff.integrator, &db->diff.gains, OB_DB_MAX_DUTY);
     ob_trajectory_plan_hold(&db->sum.trajectory, 0.0f);
     ob_trajectory_plan_hold(&db->diff.trajectory, 0.0f);
     db->mode = OB_DB_IDLE;
@@ -162,8 +136,10 @@ bool ob_drivebase_settings(ob_drivebase_t *db, float straight_speed_dps, float t
     return true;
 }
 
-void ob_drivebase_set_gains(ob_drivebase_t *db, bool heading_axis, const ob_drivebase_gains_t *gains) {
-    (heading_axis ? &db->diff : &db->sum)->gains = *gains;
+void ob_drivebase_set_gains(ob_drivebase_t *db, bool heading_axis, const ob_control_gains_t *gains) {
+    ob_drivebase_axis_t *axis = heading_axis ? &db->diff : &db->sum;
+    axis->gains = *gains;
+    ob_integrator_set_limit(&axis->integrator, gains, OB_DB_MAX_DUTY);
 }
 
 /*
@@ -187,8 +163,8 @@ static void begin_command(ob_drivebase_t *db, float *s0, float *vs0, float *d0, 
         *vs0 = db->sum_dps;
         *d0 = db->diff_deg;
         *vd0 = db->diff_dps;
-        db->sum.integral_deg_s = 0.0f;
-        db->diff.integral_deg_s = 0.0f;
+        ob_integrator_reset(&db->sum.integrator);
+        ob_integrator_reset(&db->diff.integrator);
     }
     db->fault = 0;
     db->start_ms = db->now_ms;
@@ -264,7 +240,7 @@ bool ob_drivebase_curve(ob_drivebase_t *db, float radius_mm, float angle_deg, ob
         return ob_drivebase_turn(db, angle_deg, then);
     }
     float radius_abs = fabsf(radius_mm);
-    float distance_mm = signf(radius_mm) * radius_abs * fabsf(angle_deg) * (OB_DB_PI / 180.0f);
+    float distance_mm = ob_signf(radius_mm) * radius_abs * fabsf(angle_deg) * (OB_DB_PI / 180.0f);
     float sum_deg = distance_mm * db->deg_per_mm;
     float diff_deg = angle_deg * db->diff_per_heading;
     if (!isfinite(sum_deg) || !isfinite(diff_deg)) {
@@ -450,13 +426,8 @@ void ob_drivebase_get_state(const ob_drivebase_t *db, ob_drivebase_state_t *stat
 
 /* Update the observers and the measured (sum, diff); returns true when every feedback in use was fresh. */
 static bool estimate(ob_drivebase_t *db, const ob_drivebase_feedback_t *fb, uint32_t dt_ms) {
-    if (dt_ms != db->cached_dt_ms) {
-        /* The period rarely changes: one division when it does, none per tick. */
-        db->cached_dt_ms = dt_ms;
-        db->cached_dt_s = (float)dt_ms * 0.001f;
-        db->cached_inv_dt = dt_ms > 0 ? 1.0f / db->cached_dt_s : 0.0f;
-    }
-    float dt_s = db->cached_dt_s;
+    ob_period_update(&db->period, dt_ms);
+    float dt_s = db->period.dt_s;
     bool fresh = true;
     for (int i = 0; i < 2; i++) {
         if (fb->wheel_ok[i] && isfinite(fb->wheel_deg[i])) {
@@ -473,7 +444,7 @@ static bool estimate(ob_drivebase_t *db, const ob_drivebase_feedback_t *fb, uint
                 /* The caller stalled (a long GC pause): the wheels went on meanwhile. */
                 ob_observer_resync(&db->observer[i], fb->wheel_deg[i], dt_s);
             } else if (dt_ms > 0) {
-                ob_observer_update_inv(&db->observer[i], fb->wheel_deg[i], dt_s, db->cached_inv_dt);
+                ob_observer_update_inv(&db->observer[i], fb->wheel_deg[i], dt_s, db->period.inv_dt);
             }
             db->wheel_last_ms[i] = db->now_ms;
         } else {
@@ -511,22 +482,10 @@ static bool estimate(ob_drivebase_t *db, const ob_drivebase_feedback_t *fb, uint
     return fresh;
 }
 
-/*
- * A command plans from the state of the last step. When the first step
- * after it comes more than the watchdog after that one, the drive
- * base was not being ticked (unsubscribed while another controller drove the
- * wheels): the robot may stand elsewhere and the plan's start lies in the
- * past, so following it would drive back to where the robot was. Carry the
- * command over to where the robot is now, starting now, at the speeds it was
- * planned to start at (what this drive base last did: at rest after a
- * hand-over, at speed after a stall of its caller).
- */
+/* control.h's plan confirmation: a command given while the drive base was not
+ * being ticked is carried over to where the robot is now. */
 static void confirm_plan(ob_drivebase_t *db) {
-    if (!db->plan_unconfirmed) {
-        return;
-    }
-    db->plan_unconfirmed = false;
-    if ((uint32_t)(db->now_ms - db->start_ms) <= db->watchdog_ms) {
+    if (!ob_control_plan_stale(&db->plan_unconfirmed, db->now_ms, db->start_ms, db->watchdog_ms)) {
         return;
     }
     shift_axis(&db->sum, db->plan_sum_deg - db->sum_deg);
@@ -658,51 +617,26 @@ static bool supervise(ob_drivebase_t *db) {
     }
 }
 
-/* PID + feed-forward of one axis, before saturation. */
-static float axis_effort(const ob_drivebase_axis_t *axis, const ob_trajectory_sample_t *ref, float x_deg,
-                         float v_dps) {
-    const ob_drivebase_gains_t *g = &axis->gains;
-    float friction = fabsf(ref->v_dps) > OB_DB_REST_DPS ? signf(ref->v_dps) * g->ff_friction : 0.0f;
-    return g->kp * (ref->x_deg - x_deg) + g->ki * axis->integral_deg_s + g->kd * (ref->v_dps - v_dps) +
-           g->ff_speed * ref->v_dps + g->ff_accel * ref->a_dps2 + friction;
-}
-
-/*
- * Integrator rules (pbio-like): integrate only on fresh feedback, never while
- * the output is pinned against the duty limit in the direction the error
- * pushes (that is wind-up), clip the error first so a transient cannot
- * charge it, and bound what it may contribute.
- */
-static void integrate(ob_drivebase_axis_t *axis, float error_deg, float clipped_by, float dt_s) {
-    const ob_drivebase_gains_t *g = &axis->gains;
-    if (clipped_by * error_deg > 0.0f || g->ki <= 0.0f) {
-        return;
-    }
-    axis->integral_deg_s += clampf(error_deg, -g->integral_rate_deg, g->integral_rate_deg) * dt_s;
-    float bound = g->integral_max_pct / g->ki;
-    axis->integral_deg_s = clampf(axis->integral_deg_s, -bound, bound);
-}
-
 static void control(ob_drivebase_t *db, bool fresh, uint32_t dt_ms) {
     if (db->pinned_ms >= OB_DB_PINNED_MIN_MS && fabsf(db->sum_dps) + fabsf(db->diff_dps) > OB_DB_RELEASE_DPS) {
         plan_landing(db); /* released: carry on from here rather than lunge at the paused reference */
     }
     ob_trajectory_sample_t rs, rd;
     float t = elapsed_s(db);
-    float dt_s = fminf(db->cached_dt_s, OB_DB_MAX_DT_S);
+    float dt_s = fminf(db->period.dt_s, OB_DB_MAX_DT_S);
     ob_trajectory_sample(&db->sum.trajectory, t, &rs);
     ob_trajectory_sample(&db->diff.trajectory, t, &rd);
     float es = rs.x_deg - db->sum_deg;
     float ed = rd.x_deg - db->diff_deg;
-    float us = axis_effort(&db->sum, &rs, db->sum_deg, db->sum_dps);
-    float ud = axis_effort(&db->diff, &rd, db->diff_deg, db->diff_dps);
+    float us = ob_control_duty(&db->sum.gains, &rs, es, db->sum_dps, &db->sum.integrator);
+    float ud = ob_control_duty(&db->diff.gains, &rd, ed, db->diff_dps, &db->diff.integrator);
     /* The heading loop has first call on the duty range; forward progress gets what is left. */
-    float ud_sat = clampf(ud, -OB_DB_MAX_DUTY, OB_DB_MAX_DUTY);
+    float ud_sat = ob_clampf(ud, OB_DB_MAX_DUTY);
     float room = OB_DB_MAX_DUTY - fabsf(ud_sat);
-    float us_sat = clampf(us, -room, room);
+    float us_sat = ob_clampf(us, room);
     if (fresh && dt_s > 0.0f) {
-        integrate(&db->sum, es, us - us_sat, dt_s);
-        integrate(&db->diff, ed, ud - ud_sat, dt_s);
+        ob_integrator_update(&db->sum.integrator, &db->sum.gains, &rs, es, us - us_sat, dt_s);
+        ob_integrator_update(&db->diff.integrator, &db->diff.gains, &rd, ed, ud - ud_sat, dt_s);
     }
     /*
      * A robot that cannot keep up (blocked, overloaded, a weak wheel at top
@@ -745,8 +679,8 @@ void ob_drivebase_step(ob_drivebase_t *db, uint32_t now_ms, const ob_drivebase_f
             db->fault = silent;
             db->mode = OB_DB_FAULT;
             db->done = true;
-            db->sum.integral_deg_s = 0.0f;
-            db->diff.integral_deg_s = 0.0f;
+            ob_integrator_reset(&db->sum.integrator);
+            ob_integrator_reset(&db->diff.integrator);
             set_output(db, true, 0.0f, 0.0f);
         } else {
             confirm_plan(db);

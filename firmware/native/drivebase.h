@@ -7,7 +7,8 @@
  *   diff d = (left - right) / 2   body rotation; positive = turning right
  * A body heading of h degrees (clockwise from above) is d = h * track / D.
  *
- * Each axis follows its own trajectory with PID + feed-forward; the duties are
+ * Each axis follows its own trajectory with control.h's law (PID +
+ * feed-forward, one set of integrator rules); the duties are
  * left = u_s + u_d and right = u_s - u_d. When the sum of the two exceeds the
  * duty range, the heading loop keeps its authority and forward progress is
  * what gives way, so a weak or dragging wheel slows the robot down rather
@@ -25,6 +26,7 @@
 #include <stdbool.h>
 #include <stdint.h>
 
+#include "control.h"
 #include "observer.h"
 #include "ob_types.h"
 #include "trajectory.h"
@@ -52,19 +54,6 @@ typedef struct {
     void *ctx;
 } ob_heading_source_t;
 
-/* Control law of one axis. Duty is percent (-100..100), errors wheel-degrees. */
-typedef struct {
-    float kp;                 /* duty % per wheel-deg of position error */
-    float ki;                 /* duty % per wheel-deg*s of integrated error */
-    float kd;                 /* duty % per wheel-deg/s of speed error */
-    float ff_speed;           /* duty % per wheel-deg/s of reference speed (back-EMF, viscous friction) */
-    float ff_accel;           /* duty % per wheel-deg/s^2 of reference acceleration (inertia) */
-    float ff_friction;        /* duty % in the direction of the reference speed (Coulomb friction) */
-    float integral_rate_deg;  /* errors are clipped to this before integration, so one transient
-                                 cannot charge the integrator quickly */
-    float integral_max_pct;   /* bound on the integrator's contribution, duty % */
-} ob_drivebase_gains_t;
-
 /* End-of-move tolerances, the landing threshold and the lag that pauses a move. */
 typedef struct {
     float position_deg;       /* both axes within this of target ... */
@@ -80,8 +69,8 @@ typedef struct {
  */
 typedef struct {
     ob_trajectory_t trajectory;
-    ob_drivebase_gains_t gains;
-    float integral_deg_s;
+    ob_control_gains_t gains;
+    ob_integrator_t integrator;
     float target_deg;         /* positional commands: where this axis ends */
     float speed_dps;          /* positional: cruise speed (magnitude); speed commands: the speed to keep */
     float accel_dps2;         /* acceleration of the command on this axis */
@@ -179,15 +168,12 @@ typedef struct {
     bool clock_started;
     uint8_t fault;
     ob_drivebase_output_t output;
-    ob_drivebase_output_t written; /* what the tick last wrote through io, per wheel ... */
-    bool written_valid[2];         /* ... once it has written anything */
-    uint32_t cached_dt_ms;    /* tick spacing the two values below were computed for */
-    float cached_dt_s;
-    float cached_inv_dt;
+    ob_output_t written[2];   /* what the tick last wrote through io, per wheel */
+    ob_period_t period;       /* the tick spacing, for the usual, unchanging case */
 } ob_drivebase_t;
 
-/* Gains that suit a small geared DC motor or serial-bus servo in duty mode at 1 kHz. */
-void ob_drivebase_default_gains(ob_drivebase_gains_t *gains);
+/* Gains of either axis that suit a small geared DC motor or serial-bus servo in duty mode at 1 kHz. */
+void ob_drivebase_default_gains(ob_control_gains_t *gains);
 
 /*
  * Set up a drivebase, idle and coasting. Returns false (and leaves db
@@ -201,7 +187,7 @@ bool ob_drivebase_settings(ob_drivebase_t *db, float straight_speed_dps, float t
                            float acceleration_dps2, float turn_acceleration_dps2);
 
 /* Replace one axis' gains (sum: forward, diff: heading). */
-void ob_drivebase_set_gains(ob_drivebase_t *db, bool heading_axis, const ob_drivebase_gains_t *gains);
+void ob_drivebase_set_gains(ob_drivebase_t *db, bool heading_axis, const ob_control_gains_t *gains);
 
 /*
  * Moves. Each supersedes whatever was running and starts from the current

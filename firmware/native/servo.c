@@ -45,14 +45,6 @@ void ob_servo_config_default(ob_servo_config_t *cfg) {
     cfg->observer_beta = OB_OBSERVER_DEFAULT_BETA;
 }
 
-static float clampf(float x, float limit) {
-    return x > limit ? limit : (x < -limit ? -limit : x);
-}
-
-static float sign_of(float x) {
-    return x > 0.0f ? 1.0f : (x < 0.0f ? -1.0f : 0.0f);
-}
-
 static bool direct_read_angle(void *ctx, float *angle_deg) {
     (void)ctx;
     (void)angle_deg;
@@ -73,21 +65,11 @@ const ob_motor_io_t ob_servo_direct_io = {direct_read_angle, direct_write_duty, 
 /* ---- Output: only what changed reaches the hardware. ---- */
 
 static void output_coast(ob_servo_t *s) {
-    if (!s->output_valid || !s->coasting) {
-        s->io.write_coast(s->io.ctx);
-    }
-    s->output_valid = true;
-    s->coasting = true;
-    s->duty_out_pct = 0.0f;
+    ob_output_write(&s->output, &s->io, true, 0.0f, false);
 }
 
 static void output_duty(ob_servo_t *s, float duty_pct) {
-    if (!s->output_valid || s->coasting || duty_pct != s->duty_out_pct) {
-        s->io.write_duty(s->io.ctx, duty_pct);
-    }
-    s->output_valid = true;
-    s->coasting = false;
-    s->duty_out_pct = duty_pct;
+    ob_output_write(&s->output, &s->io, false, duty_pct, false);
 }
 
 /* ---- State shared by the commands. ---- */
@@ -95,7 +77,21 @@ static void output_duty(ob_servo_t *s, float duty_pct) {
 static void apply_config(ob_servo_t *s, const ob_servo_config_t *cfg) {
     s->cfg = *cfg;
     float counts = cfg->counts_per_rev > 0.0f ? cfg->counts_per_rev : 4096.0f;
-    s->integrator_deadband_deg = 0.5f * 360.0f / counts;
+    s->integrator.deadband_deg = 0.5f * 360.0f / counts;
+    s->position_gains = (ob_control_gains_t){
+        .kp_pct_per_deg = cfg->kp_pct_per_deg,
+        .ki_pct_per_deg_s = cfg->ki_pct_per_deg_s,
+        .kd_pct_per_dps = cfg->kd_pct_per_dps,
+        .ff_pct_per_dps = cfg->ff_pct_per_dps,
+        .ff_pct_per_dps2 = cfg->ff_pct_per_dps2,
+        .ff_static_pct = cfg->ff_static_pct,
+        .integral_band_deg = cfg->integral_band_deg,
+        .integral_limit_pct = cfg->integral_limit_pct,
+    };
+    s->speed_gains = s->position_gains;
+    s->speed_gains.kp_pct_per_deg = cfg->speed_ki_pct_per_deg;
+    s->speed_gains.ki_pct_per_deg_s = 0.0f;
+    s->speed_gains.kd_pct_per_dps = cfg->speed_kp_pct_per_dps;
     s->observer.alpha = cfg->observer_alpha > 0.0f && cfg->observer_alpha <= 1.0f
                             ? cfg->observer_alpha
                             : OB_OBSERVER_DEFAULT_ALPHA;
@@ -107,9 +103,7 @@ static void apply_config(ob_servo_t *s, const ob_servo_config_t *cfg) {
 static void refresh_limits(ob_servo_t *s) {
     float ki_speed = s->cfg.speed_ki_pct_per_deg;
     s->speed_error_max_deg = ki_speed > 0.0f ? s->duty_limit_pct / ki_speed : 0.0f;
-    float limit = s->cfg.integral_limit_pct < s->duty_limit_pct ? s->cfg.integral_limit_pct : s->duty_limit_pct;
-    float ki = s->cfg.ki_pct_per_deg_s;
-    s->integral_max_deg_s = ki > 0.0f ? limit / ki : 0.0f;
+    ob_integrator_set_limit(&s->integrator, &s->position_gains, s->duty_limit_pct);
 }
 
 void ob_servo_init(ob_servo_t *s, const ob_motor_io_t *io, const ob_servo_config_t *cfg) {
@@ -117,13 +111,13 @@ void ob_servo_init(ob_servo_t *s, const ob_motor_io_t *io, const ob_servo_config
     s->io = *io;
     ob_observer_init(&s->observer, cfg->observer_alpha, cfg->observer_beta);
     apply_config(s, cfg);
-    s->duty_limit_pct = clampf(cfg->duty_limit_pct, 100.0f);
+    s->duty_limit_pct = ob_clampf(cfg->duty_limit_pct, 100.0f);
     if (s->duty_limit_pct < 0.0f) {
         s->duty_limit_pct = 0.0f;
     }
     refresh_limits(s);
     s->mode = OB_SERVO_COAST;
-    s->coasting = true;
+    s->output.coasting = true;
     s->done = true;
     ob_trajectory_plan_hold(&s->trajectory, 0.0f);
 }
@@ -153,7 +147,7 @@ static bool following_reference(const ob_servo_t *s) {
 /* Every new command forgets the previous one's integrator and status. */
 static void begin_command(ob_servo_t *s, ob_servo_mode_t mode) {
     s->mode = mode;
-    s->integral_deg_s = 0.0f;
+    ob_integrator_reset(&s->integrator);
     s->ref_offset_deg = 0.0f;
     s->stalled = false;
     s->stall_timing = false;
@@ -175,7 +169,7 @@ static void start_state(const ob_servo_t *s, bool was_tracking, float *x_deg, fl
 }
 
 static float capped_speed(const ob_servo_t *s, float speed_dps) {
-    return clampf(speed_dps, s->cfg.max_speed_dps);
+    return ob_clampf(speed_dps, s->cfg.max_speed_dps);
 }
 
 static void plan_from(ob_servo_t *s, float x0, float v0) {
@@ -186,7 +180,7 @@ static void plan_from(ob_servo_t *s, float x0, float v0) {
     } else {
         float target = s->cmd_value_deg;
         if (s->cmd_relative) {
-            float direction = sign_of(s->cmd_speed_dps) * sign_of(s->cmd_value_deg);
+            float direction = ob_signf(s->cmd_speed_dps) * ob_signf(s->cmd_value_deg);
             target = x0 + direction * fabsf(s->cmd_value_deg);
         }
         float speed = fabsf(s->cmd_speed_dps);
@@ -217,23 +211,11 @@ static void plan_or_defer(ob_servo_t *s, bool was_tracking) {
     }
 }
 
-/*
- * A command plans from the state of the last tick. When the next reading
- * comes more than silent_timeout_ms after that tick, the servo was not being
- * ticked (unsubscribed while another controller drove the motor, or its
- * caller stalled): the shaft may have been turned meanwhile and the
- * trajectory's start lies in the past, so following it would lunge at full
- * duty toward a target computed from a stale angle. Plan the command again
- * from this reading, starting now, at the speed it was planned to start at
- * (what the servo itself last did: at rest after a hand-over, at speed after
- * a stall of its caller).
- */
+/* control.h's plan confirmation: a command given while the servo was not
+ * being ticked is planned again from the first fresh reading. */
 static void confirm_plan(ob_servo_t *s, uint32_t now_ms) {
-    if (!s->plan_unconfirmed) {
-        return;
-    }
-    s->plan_unconfirmed = false;
-    if (closed_loop(s) && now_ms - s->start_ms > s->cfg.silent_timeout_ms) {
+    bool stale = ob_control_plan_stale(&s->plan_unconfirmed, now_ms, s->start_ms, s->cfg.silent_timeout_ms);
+    if (stale && closed_loop(s)) {
         /* The observer's speed over the gap is an average that may include someone else's move. */
         float v0 = s->trajectory.v_dps[0];
         s->observer.v_dps = v0;
@@ -284,8 +266,8 @@ void ob_servo_hold(ob_servo_t *s) {
 void ob_servo_dc(ob_servo_t *s, float duty_pct) {
     begin_command(s, OB_SERVO_DUTY);
     s->needs_plan = false;
-    s->duty_cmd_pct = clampf(duty_pct, 100.0f);
-    output_duty(s, clampf(s->duty_cmd_pct, s->duty_limit_pct));
+    s->duty_cmd_pct = ob_clampf(duty_pct, 100.0f);
+    output_duty(s, ob_clampf(s->duty_cmd_pct, s->duty_limit_pct));
 }
 
 void ob_servo_brake(ob_servo_t *s) {
@@ -353,11 +335,6 @@ static void update_stall(ob_servo_t *s, float error_deg, float duty_unclamped, u
     }
 }
 
-static float feed_forward(const ob_servo_t *s) {
-    return s->cfg.ff_pct_per_dps * s->ref.v_dps + s->cfg.ff_pct_per_dps2 * s->ref.a_dps2 +
-           s->cfg.ff_static_pct * sign_of(s->ref.v_dps);
-}
-
 static float speed_control(ob_servo_t *s, float t_s) {
     if (t_s > OB_SERVO_REBASE_S && t_s > ob_trajectory_duration_s(&s->trajectory)) {
         ob_trajectory_plan_speed(&s->trajectory, s->ref.x_deg + s->ref_offset_deg, s->ref.v_dps,
@@ -380,32 +357,18 @@ static float speed_control(ob_servo_t *s, float t_s) {
             error = -error_max;
         }
     }
-    float duty = feed_forward(s) + s->cfg.speed_kp_pct_per_dps * (s->ref.v_dps - s->observer.v_dps) +
-                 ki * error;
+    float duty = ob_control_duty(&s->speed_gains, &s->ref, error, s->observer.v_dps, &s->integrator);
     update_stall(s, error, duty, s->now_ms);
     return duty;
 }
 
 static float position_control(ob_servo_t *s, float dt_s) {
     float error = s->ref.x_deg - s->angle_deg;
-    float duty_pd = feed_forward(s) + s->cfg.kp_pct_per_deg * error +
-                    s->cfg.kd_pct_per_dps * (s->ref.v_dps - s->observer.v_dps);
-    float ki = s->cfg.ki_pct_per_deg_s;
-    if (ki > 0.0f) {
-        /* pbio-style rules: only a steady reference, a small error (larger
-         * ones are the proportional term's job), outside the quantisation
-         * dead band, and never deeper into saturation. */
-        float abs_error = fabsf(error);
-        bool steady = s->ref.a_dps2 == 0.0f;
-        bool small = abs_error < s->cfg.integral_band_deg && abs_error > s->integrator_deadband_deg;
-        float duty_now = duty_pd + ki * s->integral_deg_s;
-        bool saturated_same_way = fabsf(duty_now) >= s->duty_limit_pct && duty_now * error > 0.0f;
-        if (steady && small && !saturated_same_way) {
-            s->integral_deg_s += error * dt_s;
-        }
-        s->integral_deg_s = clampf(s->integral_deg_s, s->integral_max_deg_s);
-    }
-    float duty = duty_pd + ki * s->integral_deg_s;
+    const ob_control_gains_t *g = &s->position_gains;
+    float before = s->integrator.integral_deg_s;
+    float duty = ob_control_duty(g, &s->ref, error, s->observer.v_dps, &s->integrator);
+    ob_integrator_update(&s->integrator, g, &s->ref, error, duty - ob_clampf(duty, s->duty_limit_pct), dt_s);
+    duty += g->ki_pct_per_deg_s * (s->integrator.integral_deg_s - before);
     update_stall(s, error, duty, s->now_ms);
     return duty;
 }
@@ -433,15 +396,11 @@ static void finish_move(ob_servo_t *s, float t_s) {
 }
 
 static void read_feedback(ob_servo_t *s, uint32_t now_ms, uint32_t dt_ms, bool have_angle, float sensor_deg) {
-    if (dt_ms != s->cached_dt_ms) {
-        s->cached_dt_ms = dt_ms;
-        s->cached_dt_s = 0.001f * (float)dt_ms;
-        s->cached_inv_dt = dt_ms > 0u ? 1000.0f / (float)dt_ms : 0.0f;
-    }
+    ob_period_update(&s->period, dt_ms);
     if (!have_angle) {
         s->failed_reads++;
         s->silent_ticks++;
-        ob_observer_predict(&s->observer, s->cached_dt_s);
+        ob_observer_predict(&s->observer, s->period.dt_s);
         return;
     }
     s->silent_ticks = 0u;
@@ -459,9 +418,9 @@ static void read_feedback(ob_servo_t *s, uint32_t now_ms, uint32_t dt_ms, bool h
     s->angle_deg = sensor_deg + s->offset_deg;
     if (dt_ms > s->cfg.silent_timeout_ms) {
         /* The caller stalled (a long GC pause): the motor went on meanwhile. */
-        ob_observer_resync(&s->observer, s->angle_deg, s->cached_dt_s);
+        ob_observer_resync(&s->observer, s->angle_deg, s->period.dt_s);
     } else {
-        ob_observer_update_inv(&s->observer, s->angle_deg, s->cached_dt_s, s->cached_inv_dt);
+        ob_observer_update_inv(&s->observer, s->angle_deg, s->period.dt_s, s->period.inv_dt);
     }
 }
 
@@ -482,7 +441,7 @@ void ob_servo_step(ob_servo_t *s, uint32_t now_ms, bool have_angle, float sensor
         if (silent_too_long && (closed_loop(s) || s->needs_plan)) {
             s->feedback_lost = true;
             s->mode = OB_SERVO_COAST;
-            s->integral_deg_s = 0.0f;
+            ob_integrator_reset(&s->integrator);
             s->needs_plan = false;
             s->done = true;
             output_coast(s);
@@ -504,16 +463,16 @@ void ob_servo_step(ob_servo_t *s, uint32_t now_ms, bool have_angle, float sensor
         if (s->mode == OB_SERVO_SPEED) {
             duty = speed_control(s, t_s);
         } else {
-            duty = position_control(s, s->cached_dt_s);
+            duty = position_control(s, s->period.dt_s);
         }
-        output_duty(s, clampf(duty, s->duty_limit_pct));
+        output_duty(s, ob_clampf(duty, s->duty_limit_pct));
         if (s->mode == OB_SERVO_POSITION) {
             finish_move(s, t_s);
         }
         break;
     }
     case OB_SERVO_DUTY:
-        output_duty(s, clampf(s->duty_cmd_pct, s->duty_limit_pct));
+        output_duty(s, ob_clampf(s->duty_cmd_pct, s->duty_limit_pct));
         break;
     case OB_SERVO_BRAKE:
         output_duty(s, 0.0f);

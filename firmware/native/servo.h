@@ -6,8 +6,8 @@
  *
  * Every closed-loop command tracks a trajectory sampled at the scheduler's
  * measured clock, so a late tick costs one control update but never stretches
- * the move. The control law is feed-forward from the reference (speed,
- * acceleration, static friction) plus feedback:
+ * the move. The control law is control.h's, feed-forward from the reference
+ * (speed, acceleration, static friction) plus feedback:
  *
  *   speed runs      duty = ff + speed_kp * (v_ref - v) + speed_ki * (x_ref - x)
  *                   The position term is the integral of the speed error. When
@@ -16,11 +16,8 @@
  *                   asks for more than the duty limit: no windup, and the
  *                   motor does not race to catch up once released.
  *   position moves  duty = ff + kp * (x_ref - x) + kd * (v_ref - v) + ki * I
- *                   I integrates the position error only while the reference
- *                   is not accelerating, the error is small (integral_band)
- *                   and the output is not saturated in the error's direction;
- *                   ki * I is clamped to integral_limit_pct and I restarts at
- *                   zero with every new command.
+ *                   I follows control.h's integrator rules, restarting at zero
+ *                   with every new command.
  *
  * Units: degrees, deg/s, deg/s^2 at the output shaft; duty in percent.
  */
@@ -30,6 +27,7 @@
 #include <stdbool.h>
 #include <stdint.h>
 
+#include "control.h"
 #include "ob_types.h"
 #include "observer.h"
 #include "trajectory.h"
@@ -47,7 +45,7 @@ typedef struct {
     float kp_pct_per_deg;
     float ki_pct_per_deg_s;
     float kd_pct_per_dps;
-    float integral_band_deg;  /* integrate only while |error| is below this */
+    float integral_band_deg;  /* errors are clipped to this before they are integrated */
     float integral_limit_pct; /* clamp on the integral's share of the duty */
     /* Speed loop. */
     float speed_kp_pct_per_dps;
@@ -100,20 +98,19 @@ typedef struct {
     float reset_to_deg;
     uint32_t start_ms;        /* scheduler time of the trajectory's t = 0 */
     float ref_offset_deg;     /* speed runs: how far the reference was dragged back */
-    float integral_deg_s;     /* position loop integrator */
+    ob_control_gains_t position_gains; /* the configuration's, as control.h takes them */
+    ob_control_gains_t speed_gains;    /* the speed loop as a PD on position: kp = speed_ki, kd = speed_kp */
+    ob_integrator_t integrator;        /* position loop */
     float duty_cmd_pct;       /* open-loop duty (dc) */
     float duty_limit_pct;     /* active duty cap (<= 100) */
-    float integrator_deadband_deg;
 
     /* Last tick. */
     uint32_t now_ms;
     bool clock_valid;         /* a tick has happened since init */
     bool have_angle;          /* a reading has been seen since init */
-    bool output_valid;        /* something has been written since init */
     float angle_deg;          /* last measured angle, in the user frame */
     float offset_deg;         /* user angle = sensor angle + offset_deg */
-    float duty_out_pct;       /* duty written last (0 while coasting) */
-    bool coasting;            /* output released */
+    ob_output_t output;       /* what the motor was told last */
     ob_trajectory_sample_t ref;
 
     /* Status. */
@@ -127,13 +124,9 @@ typedef struct {
     uint32_t failed_reads;    /* total failed reads since init */
     uint32_t silent_ticks;    /* consecutive failed reads */
 
-    /* Hoisted per-tick constants for the usual, unchanging tick spacing. */
-    uint32_t cached_dt_ms;
-    float cached_dt_s;
-    float cached_inv_dt;
-    /* Limits that depend only on the configuration and the duty cap. */
-    float speed_error_max_deg; /* speed runs: the position term alone reaches the duty cap here */
-    float integral_max_deg_s;  /* position loop: ki * I stays within the integral limit */
+    ob_period_t period;       /* the tick spacing, for the usual, unchanging case */
+    /* Speed runs: the position term alone reaches the duty cap here (configuration and cap only). */
+    float speed_error_max_deg;
 } ob_servo_t;
 
 /* Defaults for an ST-3032-class geared servo (888 deg/s no load, ~1 N*m
@@ -143,7 +136,7 @@ typedef struct {
 void ob_servo_config_default(ob_servo_config_t *cfg);
 
 /* The IO of a servo stepped directly: nothing to read (ob_servo_step is handed
- * each reading) and nothing to write (the caller reads duty_out_pct back). */
+ * each reading) and nothing to write (the caller reads ob_servo_duty_out back). */
 extern const ob_motor_io_t ob_servo_direct_io;
 
 /* Start coasting, with no angle seen yet. cfg is copied. */
@@ -201,6 +194,12 @@ static inline float ob_servo_angle_deg(const ob_servo_t *s) {
 
 static inline float ob_servo_speed_dps(const ob_servo_t *s) {
     return s->observer.v_dps;
+}
+
+/* The duty written last, or false while the output is released (coasting). */
+static inline bool ob_servo_duty_out(const ob_servo_t *s, float *duty_pct) {
+    *duty_pct = s->output.duty_pct;
+    return !s->output.coasting;
 }
 
 #endif /* OB_SERVO_H */

@@ -477,10 +477,11 @@ static PyObject *servo_set_duty_limit(ServoObject *self, PyObject *arg) {
 /* ---- Ticking. ---- */
 
 static PyObject *duty_result(const ob_servo_t *s) {
-    if (s->coasting) {
+    float duty;
+    if (!ob_servo_duty_out(s, &duty)) {
         Py_RETURN_NONE;
     }
-    return PyFloat_FromDouble((double)s->duty_out_pct);
+    return PyFloat_FromDouble((double)duty);
 }
 
 static PyObject *servo_tick(ServoObject *self, PyObject *arg) {

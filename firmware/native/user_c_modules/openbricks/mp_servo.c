@@ -348,7 +348,8 @@ static MP_DEFINE_CONST_FUN_OBJ_2(servo_set_duty_limit_obj, servo_set_duty_limit)
 /* ---- Ticking. ---- */
 
 static mp_obj_t duty_result(const ob_servo_t *s) {
-    return s->coasting ? mp_const_none : mp_obj_new_float(s->duty_out_pct);
+    float duty;
+    return ob_servo_duty_out(s, &duty) ? mp_obj_new_float(duty) : mp_const_none;
 }
 
 static mp_obj_t servo_tick(mp_obj_t self_in, mp_obj_t now_in) {
