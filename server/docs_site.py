@@ -49,8 +49,9 @@ def page_for(topic: str | None) -> Path:
     if topic is None:
         return pages["index"]
     wanted = topic.lower().strip("/").removesuffix(".html").removesuffix(".md")
-    if wanted in pages:
-        return pages[wanted]
+    for name in (wanted, wanted + "/index"):  # `api` is the API reference's own index page
+        if name in pages:
+            return pages[name]
     by_stem = {name.rsplit("/", 1)[-1]: name for name in pages if name.rsplit("/", 1)[-1] != "index"}
     if wanted in by_stem:
         return pages[by_stem[wanted]]

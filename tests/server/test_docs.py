@@ -55,6 +55,8 @@ def test_a_topic_opens_its_page_by_name_or_path_and_a_typo_gets_suggestions(tmp_
     assert "straight(distance_mm" in text_of(opened_page(opened))
     done, by_path = run_docs(tmp_path, "api/drivebase")
     assert by_path == opened
+    done, opened = run_docs(tmp_path, "api")
+    assert done.returncode == 0 and opened[0].endswith("/api/index.html")
     done, opened = run_docs(tmp_path, "simulater")
     assert done.returncode == 2 and opened == []  # a wrong argument
     assert "no docs page 'simulater'; did you mean simulator?" in done.stderr
