@@ -7,7 +7,19 @@ module that mentions the cores still imports on a MicroPython build without them
 interpreter of the tests); using a core there raises an ImportError that says what is missing.
 """
 
-NAMES = ("motor_process", "Servo", "TrapezoidalProfile", "Observer", "DriveBase", "ImuYaw", "scs")
+NAMES = (
+    "motor_process",
+    "Servo",
+    "TrapezoidalProfile",
+    "Observer",
+    "DriveBase",
+    "ImuYaw",
+    "scs",
+    "serial_bus",
+    "MotorIO",
+    "interrupt_main",
+    "ticks_itself",
+)
 
 
 _MISSING = (
@@ -35,9 +47,23 @@ def available():
     return True
 
 
-def __getattr__(name):
+def _check_name(name):
     if name not in NAMES:
         raise AttributeError("openbricks._native has no %r; the cores are %s" % (name, ", ".join(NAMES)))
+
+
+def get(name):
+    """The core or hook `name`, or None where this interpreter has no such thing: for what the runtime
+    does without (an older firmware, the WebAssembly interpreter of the tests, a host build)."""
+    _check_name(name)
+    try:
+        return getattr(_module(), name, None)
+    except ImportError:
+        return None
+
+
+def __getattr__(name):
+    _check_name(name)
     value = getattr(_module(), name, None)
     if value is None:
         raise ImportError(

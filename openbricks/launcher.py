@@ -47,7 +47,7 @@ import time
 import machine
 
 import openbricks
-from openbricks import estop, log, pins
+from openbricks import _native, estop, log, pins
 
 DEFAULT_PROGRAM_PATH = "/program.mpy"
 DEFAULT_BUTTON_PIN = 39
@@ -125,21 +125,12 @@ def _raise_interrupt():
 
 def _native_interrupt():
     """The firmware's C hook that raises KeyboardInterrupt in the main thread, or None."""
-    try:
-        import _openbricks_native
-    except ImportError:
-        return None
-    return getattr(_openbricks_native, "interrupt_main", None)
+    return _native.get("interrupt_main")
 
 
 def _native_wipe():
     """Drop the finished program's controllers from the native scheduler, if this build has one."""
-    try:
-        import _openbricks_native
-    except ImportError:
-        return
-    process = getattr(_openbricks_native, "motor_process", None)
-    reset = getattr(process, "reset", None)
+    reset = getattr(_native.get("motor_process"), "reset", None)
     if reset is not None:
         reset()
 

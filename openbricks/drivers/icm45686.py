@@ -23,7 +23,7 @@ import time
 from machine import SPI, Pin, Timer
 from micropython import const
 
-from openbricks import pins
+from openbricks import _native, pins
 from openbricks.interfaces import HeadingFrame
 
 _ACCEL_DATA = const(0x00)
@@ -267,11 +267,10 @@ class ICM45686(HeadingFrame):
 
 
 def _new_integrator(scale):
-    try:
-        from _openbricks_native import ImuYaw
-    except ImportError:
+    imu_yaw = _native.get("ImuYaw")
+    if imu_yaw is None:
         return _YawIntegrator(scale)
-    return ImuYaw(scale=scale)
+    return imu_yaw(scale=scale)
 
 
 class _YawIntegrator:

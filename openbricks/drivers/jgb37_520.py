@@ -21,7 +21,7 @@ other wheel too, as Pybricks does when a drive base motor is used directly.
 
 import time
 
-from openbricks import estop
+from openbricks import _native, estop
 from openbricks.drivers.encoder import make_encoder
 from openbricks.drivers.l298n import L298NMotor
 from openbricks.interfaces import Motor
@@ -87,12 +87,11 @@ class JGB37Motor(Motor):
         )
 
     def _make_servo(self, kp):
-        try:
-            import _openbricks_native
-        except ImportError:
+        servo_type = _native.get("Servo")
+        if servo_type is None:
             return None  # open-loop only on this build; closed-loop calls say so
         io = self._io
-        servo = _openbricks_native.Servo(
+        servo = servo_type(
             read_angle=io.read_angle,
             write_duty=io.write_duty,
             write_coast=io.coast,
@@ -122,9 +121,7 @@ class JGB37Motor(Motor):
         """`driver` (a drive base's wheel pair) drives this bridge from now on; this motor's own core
         stands down. The next direct command calls `driver.let_go()` before it drives the wheel."""
         if self._servo is not None:
-            import _openbricks_native
-
-            _openbricks_native.motor_process.unsubscribe(self._servo)
+            _native.motor_process.unsubscribe(self._servo)
         self._driver = driver
 
     def forget_drivebase(self, driver):
@@ -151,10 +148,8 @@ class JGB37Motor(Motor):
             self._take_back()
         elif self._driver is not None:
             return servo  # ticking it now would make it a second driver of the bridge
-        import _openbricks_native
-
         # Idempotent; re-arms the tick after the launcher wiped the previous program's subscribers.
-        _openbricks_native.motor_process.subscribe(servo)
+        _native.motor_process.subscribe(servo)
         return servo
 
     # --- Motor -------------------------------------------------------------------------
@@ -257,9 +252,7 @@ class JGB37Motor(Motor):
         self._take_back()
         estop.remove(self.coast)
         if self._servo is not None:
-            import _openbricks_native
-
-            _openbricks_native.motor_process.unsubscribe(self._servo)
+            _native.motor_process.unsubscribe(self._servo)
         self._bridge.close()
         self._encoder.close()
 

@@ -26,7 +26,7 @@ import time
 
 from micropython import const
 
-from openbricks import estop
+from openbricks import _native, estop
 from openbricks.drivers.st3215 import not_responding_message
 
 _POLL_MS = const(5)
@@ -41,9 +41,7 @@ def io_kwargs(io, side=None):
     through its three Python methods. `side` names the DriveBase keyword ("left" / "right"), or None
     for a Servo.
     """
-    import _openbricks_native
-
-    motor_io = getattr(_openbricks_native, "MotorIO", None)
+    motor_io = _native.get("MotorIO")
     if motor_io is not None and isinstance(io, motor_io):
         return {"io": io} if side is None else {side + "_io": io}
     if side is None:
@@ -96,9 +94,7 @@ class BusPort:
         """The drive base's controller drives `slots` from now on; direct commands there stand down.
 
         The caller subscribes the controller (after everything else has let go of the wheels)."""
-        import _openbricks_native
-
-        process = _openbricks_native.motor_process
+        process = _native.motor_process
         for slot in slots:
             servo = self._servos.get(slot)
             if servo is not None:
@@ -116,12 +112,10 @@ class BusPort:
         base = self._base
         if base is None or slot not in base[1]:
             return
-        import _openbricks_native
-
         controller, slots = base
         self._base = None
         controller.stop("coast")  # releases both wheels now; the other one stays free
-        _openbricks_native.motor_process.unsubscribe(controller)
+        _native.motor_process.unsubscribe(controller)
 
     def halt(self):
         """The e-stop's halt: every wheel and accessory this port drives is released at once."""
@@ -138,8 +132,6 @@ class BusPort:
 
         A `motion` command is refused while the e-stop is engaged; a stop (brake, hold) is not,
         as on a motor no drive base adopted."""
-        import _openbricks_native
-
         motor = self._motors[slot]
         if motion:
             estop.check("%s.%s" % (motor.side or type(motor).__name__, what))
@@ -151,11 +143,11 @@ class BusPort:
             kwargs["max_speed_dps"] = motor.max_dps
             if motor.accel_dps2 > 0:  # 0 is the servo's "no ramp"; the native default ramps steeply
                 kwargs["accel_dps2"] = motor.accel_dps2
-            servo = _openbricks_native.Servo(counts_per_rev=4096, **kwargs)
+            servo = _native.Servo(counts_per_rev=4096, **kwargs)
             if slot in self._limits:
                 servo.set_duty_limit(self._limits[slot])
             self._servos[slot] = servo
-        _openbricks_native.motor_process.subscribe(servo)
+        _native.motor_process.subscribe(servo)
         estop.on_engage(self.halt)
         return servo
 
@@ -167,9 +159,7 @@ class BusPort:
         self._take_from_drivebase(slot)
         servo = self._servos.get(slot)
         if servo is not None:
-            import _openbricks_native
-
-            _openbricks_native.motor_process.unsubscribe(servo)
+            _native.motor_process.unsubscribe(servo)
         estop.on_engage(self.halt)
 
     def _checked(self, slot):
@@ -261,9 +251,7 @@ class BusPort:
 
     def release_all(self):
         """Hand every slot back to the engine (coasting); the motors stay unusable until re-adopted."""
-        import _openbricks_native
-
-        process = _openbricks_native.motor_process
+        process = _native.motor_process
         if self._base is not None:
             process.unsubscribe(self._base[0])
             self._base = None

@@ -16,7 +16,7 @@ import time
 
 from micropython import const
 
-from openbricks import estop
+from openbricks import _native, estop
 from openbricks.parameters import then_name
 from openbricks.robotics import tick
 from openbricks.robotics.wheels import pair_for
@@ -70,12 +70,10 @@ class DriveBase:
         self._heading = _UnwrappedHeading(imu) if imu is not None else None
         self._controller = None
         if self._pair.closed_loop:
-            import _openbricks_native
-
             kwargs = self._pair.controller_io()
             if self._heading is not None:
                 kwargs["heading"] = self._heading
-            self._controller = _openbricks_native.DriveBase(
+            self._controller = _native.DriveBase(
                 self.wheel_diameter_mm, self.axle_track_mm, **kwargs
             )
             tick.ensure_running()

@@ -13,6 +13,8 @@ import time
 
 from micropython import const
 
+from openbricks import _native
+
 _TICK_HZ = const(1000)
 # Long enough for at least two ticks of a running 1 kHz tick, even with a late one in between.
 _PROBE_MS = const(5)
@@ -25,17 +27,15 @@ _state = {"timer": None}
 
 
 def _tick(_timer):
-    import _openbricks_native
-
-    _openbricks_native.motor_process.tick(time.ticks_ms())
+    _native.motor_process.tick(time.ticks_ms())
 
 
-def _ticked_elsewhere(native):
-    says = getattr(native, "ticks_itself", None)
+def _ticked_elsewhere():
+    says = _native.get("ticks_itself")
     if says is not None and (says() if callable(says) else says):
         return True
     # "Not by itself" (or no answer) does not mean nobody ticks it: a timer started earlier may.
-    process = native.motor_process
+    process = _native.motor_process
     before = process.tick_count
     time.sleep_ms(_PROBE_MS)
     return process.tick_count != before
@@ -47,9 +47,7 @@ def ensure_running():
     Called by every controller that subscribes to motor_process (a DriveBase at construction). Cheap
     to repeat: a tick that is running, ours or the runtime's, is left alone.
     """
-    import _openbricks_native
-
-    if _ticked_elsewhere(_openbricks_native):
+    if _ticked_elsewhere():
         return False
     from machine import Timer
 

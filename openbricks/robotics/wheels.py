@@ -19,6 +19,7 @@ import time
 
 from micropython import const
 
+from openbricks import _native
 from openbricks.drivers.st3215 import not_responding_message
 from openbricks.robotics.bus_port import BusPort, io_kwargs
 
@@ -93,9 +94,7 @@ class _Pair:
 
     def take(self, controller):
         """Make `controller` the one driver of both wheels (subscribed to motor_process)."""
-        import _openbricks_native
-
-        process = _openbricks_native.motor_process
+        process = _native.motor_process
         for motor in self.motors:
             previous = _drivers.get(id(motor))
             if previous is not None and previous is not controller:
@@ -110,9 +109,7 @@ class _Pair:
 
     def release(self, controller):
         """Stop ticking `controller`; the motors have no drive base driver afterwards."""
-        import _openbricks_native
-
-        _openbricks_native.motor_process.unsubscribe(controller)
+        _native.motor_process.unsubscribe(controller)
         for motor in self.motors:
             if _drivers.get(id(motor)) is controller:
                 del _drivers[id(motor)]
@@ -276,11 +273,7 @@ def _adopt(motor, serial_bus):
 
 def _engine_factory(motor):
     """`_openbricks_native.serial_bus`, or the error 8.2 asks for when this runtime has no engine."""
-    try:
-        import _openbricks_native
-    except ImportError:
-        _openbricks_native = None
-    serial_bus = getattr(_openbricks_native, "serial_bus", None)
+    serial_bus = _native.get("serial_bus")
     if serial_bus is None:
         raise RuntimeError(
             "DriveBase over serial-bus motors needs the native bus engine (the hub firmware's hard tick, "
