@@ -40,6 +40,7 @@ class SimBoard:
         self.encoders = {}  # phase_a pin -> callable() -> edges
         self.output_watchers = {}  # pin -> [callback]
         self.pins = {}  # pin -> the last machine.Pin constructed on it
+        self.pwms = {}  # pin -> the last machine.PWM constructed on it
         self.hardware_timers = {}  # timer id -> the clock handle every machine.Timer(id) shares
         self.bitstreams = []  # (pin, timing, bytes) the program sent (LED strips), last 64
         self.reset_requested = False

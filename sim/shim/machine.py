@@ -171,6 +171,7 @@ class PWM:
         self._pin = _pin_id(pin)
         self._freq = freq or 5000
         self._duty_u16 = 0
+        _sim().pwms[self._pin] = self
         self.init(freq=freq, duty=duty, duty_u16=duty_u16, duty_ns=duty_ns)
 
     def init(self, freq=None, duty=None, duty_u16=None, duty_ns=None, **kwargs):

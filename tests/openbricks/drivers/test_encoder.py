@@ -15,9 +15,9 @@ def _spin(cycles, a=7, b=8):
     order = _FORWARD if cycles >= 0 else tuple(reversed(((1, 1),) + _FORWARD[:3]))
     for _ in range(abs(cycles)):
         for level_a, level_b in order:
-            if machine.board.input_levels.get(a, 1) != level_a:
+            if machine.board.input_level(a, 1) != level_a:
                 machine.board.set_input(a, level_a)
-            if machine.board.input_levels.get(b, 1) != level_b:
+            if machine.board.input_level(b, 1) != level_b:
                 machine.board.set_input(b, level_b)
 
 
@@ -45,9 +45,9 @@ def test_a_skipped_state_is_not_counted_but_is_reported():
     pins.reset_claims()
     enc = QuadratureEncoder(7, 8)
     pin_b = machine.board.pins[8]
-    machine.board.input_levels[7] = 0
-    machine.board.input_levels[8] = 0
-    pin_b._irq_handler(pin_b)  # both lines flipped before the handler ran
+    machine.board.inputs[7] = 0
+    machine.board.inputs[8] = 0
+    pin_b._handler(pin_b)  # both lines flipped before the handler ran
     assert enc.count() == 0
     assert enc.missed == 1
 
@@ -110,7 +110,7 @@ def _without_machine_encoder(build):
 def _idle_high(*pin_ids):
     """Encoder lines at rest on their pull-ups, as _spin() expects them."""
     for pin_id in pin_ids:
-        machine.board.input_levels[pin_id] = 1
+        machine.board.inputs[pin_id] = 1
 
 
 def test_the_pcnt_peripheral_and_the_interrupt_decoder_count_the_same_way():

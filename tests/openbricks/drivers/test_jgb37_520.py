@@ -96,7 +96,7 @@ def test_the_encoder_counts_on_a_free_pcnt_unit_where_the_runtime_has_one():
     left_unit, right_unit = machine.board.encoders[0], machine.board.encoders[1]
     assert (left_unit.phase_a, left_unit.phase_b, left_unit.phases) == (7, 8, 4)
     assert (right_unit.phase_a, right_unit.phase_b) == (12, 13)
-    assert not machine.board.pins[7]._irq_handler  # no per-edge interrupt on the hub's CPU
+    assert not machine.board.pins[7]._handler  # no per-edge interrupt on the hub's CPU
     lines.move(330)
     assert approx(m.angle(), 90, 1e-6)
     QuadratureLines(12, 13).move(-660)
@@ -119,6 +119,6 @@ def test_without_machine_encoder_the_encoder_counts_in_a_pin_interrupt():
     finally:
         machine.Encoder = saved
     assert not machine.board.encoders
-    assert machine.board.pins[7]._irq_handler is not None
+    assert machine.board.pins[7]._handler is not None
     lines.move(1320 + 330)
     assert approx(m.angle(), 450, 1e-6)

@@ -89,5 +89,5 @@ def test_two_motors_cannot_share_a_pin_until_one_is_closed():
     with raises(pins.ReservedPinError, "in use as the L298N PWM/EN"):
         L298NMotor(in1=9, in2=10, pwm=17)
     first.close()
-    assert machine.board.pwms[17].deinited
+    assert machine.board.pwms[17].duty_u16() == 0  # the enable pin no longer drives the bridge
     L298NMotor(in1=9, in2=10, pwm=17)

@@ -25,8 +25,8 @@ class QuadratureLines:
         self.pin_a = pin_a
         self.pin_b = pin_b
         self.count = 0
-        board.input_levels[pin_a] = 0
-        board.input_levels[pin_b] = 0
+        board.inputs[pin_a] = 0
+        board.inputs[pin_b] = 0
 
     def move(self, counts):
         """Step the lines through `counts` edges (negative: backwards), one edge at a time."""
