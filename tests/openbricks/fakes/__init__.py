@@ -9,7 +9,7 @@ serves, it is installed as it is.
 
 import sys
 
-from . import bluetooth, clock, dupterm, machine
+from . import bluetooth, clock, dupterm, hardware, machine
 from .hardware import esp32, mptime, neopixel
 
 _IS_MICROPYTHON = sys.implementation.name == "micropython"
@@ -32,7 +32,7 @@ def install():
     sys.modules["machine"] = machine
     sys.modules["esp32"] = esp32
     sys.modules["time"] = mptime
-    sys.modules["bluetooth"] = bluetooth
+    sys.modules["bluetooth"] = hardware.bluetooth
     sys.modules["neopixel"] = neopixel
     dupterm.install()
     if not _IS_MICROPYTHON:

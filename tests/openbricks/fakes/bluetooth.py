@@ -1,246 +1,25 @@
-"""A fake of MicroPython's `bluetooth` module, at the level the hub runtime uses it.
+"""The test's side of the hub's radio: a central (the laptop) on the simulator's `bluetooth`
+model (sim/shim/bluetooth.py), which install() gives the runtime.
 
-The radio (`BLE()`, a singleton as on the hub) keeps what the runtime did:
-activity, GAP name, preferred MTU, the registered GATT table, advertising
-payloads, and every notification sent per connection. The test plays the
-central (the laptop): connect, write to a characteristic, negotiate the MTU,
-disconnect; each step raises the IRQ the real stack would raise, with the
-same event codes and data tuples.
-
-Stack behaviours the runtime must cope with are modelled where they bite:
-advertising stops when a central connects, an advertising payload over 31
-bytes is refused, a notification longer than MTU - 3 is truncated, the
-controller can run out of notification buffers (`limit_notifications`), and
-deactivating the radio drops the GATT table and every connection.
+The test connects, writes to a characteristic, negotiates the MTU and disconnects; each step
+raises the IRQ the real stack would raise. What the hub sent is read back per connection.
 """
 
-FLAG_READ = 0x0002
-FLAG_WRITE_NO_RESPONSE = 0x0004
-FLAG_WRITE = 0x0008
-FLAG_NOTIFY = 0x0010
-FLAG_INDICATE = 0x0020
+from .hardware import bluetooth as _model
 
-# IRQ event codes, as MicroPython numbers them.
-IRQ_CENTRAL_CONNECT = 1
-IRQ_CENTRAL_DISCONNECT = 2
-IRQ_GATTS_WRITE = 3
-IRQ_MTU_EXCHANGED = 21
-
-DEFAULT_MTU = 23
-MAX_ADV_PAYLOAD = 31
-
-_ENODEV = 19  # the radio is not active
-_ENOTCONN = 107
-_ENOMEM = 12  # out of controller buffers
-_EINVAL = 22
-
-
-class UUID:
-    """16-bit (int or 4 hex digits) or 128-bit (canonical string) UUID, compared by value."""
-
-    def __init__(self, value):
-        if isinstance(value, UUID):
-            value = value._text
-        if isinstance(value, int):
-            value = "%04X" % value
-        text = str(value).upper()
-        digits = text.replace("-", "")
-        if len(digits) not in (4, 32):
-            raise ValueError("invalid UUID %r" % (value,))
-        int(digits, 16)
-        self._text = text
-
-    def __eq__(self, other):
-        return isinstance(other, UUID) and other._text.replace("-", "") == self._text.replace("-", "")
-
-    def __hash__(self):
-        return hash(self._text.replace("-", ""))
-
-    def __repr__(self):
-        return "UUID('%s')" % self._text
-
-    def __str__(self):
-        return self._text
-
-
-class _Connection:
-    def __init__(self, handle, addr):
-        self.handle = handle
-        self.addr = addr
-        self.mtu = DEFAULT_MTU
-        self.notifications = []  # payloads as the central received them
-
-
-class _Radio:
-    def __init__(self):
-        self._active = False
-        self.gap_name = b"MPY ESP32"
-        self.preferred_mtu = DEFAULT_MTU
-        self.irq_handler = None
-        self.advertising = None  # (interval_us, adv_data, resp_data, connectable) while advertising
-        self.services = []  # [(service uuid, [(char uuid, flags, value handle)])]
-        self.values = {}  # value handle -> bytes
-        self.append_mode = {}  # value handle -> True when gatts_set_buffer(..., append=True)
-        self.connections = {}  # conn handle -> _Connection
-        self.notify_budget = None  # None: unlimited; else notifications accepted before ENOMEM
-        self.activations = 0
-
-    # --- the MicroPython API ---------------------------------------------------------
-
-    def active(self, state=None):
-        if state is None:
-            return self._active
-        state = bool(state)
-        if state and not self._active:
-            self.activations += 1
-        if not state:
-            # The stack shuts down: links drop without events, the GATT table is gone.
-            self.advertising = None
-            self.services = []
-            self.values = {}
-            self.append_mode = {}
-            self.connections = {}
-        self._active = state
-        return None
-
-    def config(self, *names, **settings):
-        if names:
-            if len(names) != 1 or settings:
-                raise TypeError("config() takes one name to read, or keyword settings to write")
-            name = names[0]
-            if name == "gap_name":
-                return self.gap_name
-            if name == "mtu":
-                return self.preferred_mtu
-            if name == "mac":
-                return (0, b"\x24\x0a\xc4\x00\x11\x22")
-            raise ValueError("unknown config param %r" % (name,))
-        for name, value in settings.items():
-            if name == "gap_name":
-                self.gap_name = value.encode() if isinstance(value, str) else bytes(value)
-            elif name == "mtu":
-                if not 23 <= value <= 517:
-                    raise ValueError("mtu must be 23..517")
-                self.preferred_mtu = value
-            elif name in ("rxbuf", "addr_mode", "io", "bond", "le_secure", "mitm"):
-                pass
-            else:
-                raise ValueError("unknown config param %r" % (name,))
-        return None
-
-    def irq(self, handler):
-        self.irq_handler = handler
-
-    def gap_advertise(self, interval_us, adv_data=None, *, resp_data=None, connectable=True):
-        self._require_active()
-        if interval_us is None:
-            self.advertising = None
-            return
-        adv = bytes(adv_data or b"")
-        resp = bytes(resp_data or b"")
-        if len(adv) > MAX_ADV_PAYLOAD or len(resp) > MAX_ADV_PAYLOAD:
-            raise OSError(_EINVAL)
-        self.advertising = (interval_us, adv, resp, connectable)
-
-    def gap_disconnect(self, conn_handle):
-        if conn_handle not in self.connections:
-            return False
-        disconnect(conn_handle)
-        return True
-
-    def gatts_register_services(self, definitions):
-        self._require_active()
-        self.services = []
-        self.values = {}
-        self.append_mode = {}
-        next_handle = 1
-        result = []
-        for service_uuid, characteristics in definitions:
-            entries = []
-            handles = []
-            next_handle += 1  # the service declaration
-            for characteristic in characteristics:
-                uuid, flags = characteristic[0], characteristic[1]
-                next_handle += 1  # the characteristic declaration
-                value_handle = next_handle
-                next_handle += 1
-                if flags & (FLAG_NOTIFY | FLAG_INDICATE):
-                    next_handle += 1  # its CCCD
-                self.values[value_handle] = b""
-                entries.append((UUID(uuid), flags, value_handle))
-                handles.append(value_handle)
-            self.services.append((UUID(service_uuid), entries))
-            result.append(tuple(handles))
-        return tuple(result)
-
-    def gatts_read(self, value_handle):
-        self._require_handle(value_handle)
-        value = self.values[value_handle]
-        if self.append_mode.get(value_handle):
-            self.values[value_handle] = b""
-        return value
-
-    def gatts_write(self, value_handle, data, send_update=False):
-        self._require_handle(value_handle)
-        self.values[value_handle] = bytes(data)
-        if send_update:
-            for conn in self.connections.values():
-                self._deliver(conn, self.values[value_handle])
-
-    def gatts_set_buffer(self, value_handle, length, append=False):
-        self._require_handle(value_handle)
-        self.append_mode[value_handle] = bool(append)
-
-    def gatts_notify(self, conn_handle, value_handle, data=None):
-        self._require_handle(value_handle)
-        conn = self.connections.get(conn_handle)
-        if conn is None:
-            raise OSError(_ENOTCONN)
-        if self.notify_budget is not None:
-            if self.notify_budget <= 0:
-                raise OSError(_ENOMEM)
-            self.notify_budget -= 1
-        payload = self.values[value_handle] if data is None else bytes(data)
-        self._deliver(conn, payload)
-
-    # --- internals -------------------------------------------------------------------
-
-    def _deliver(self, conn, payload):
-        # An ATT notification carries at most MTU - 3 bytes; the stack cuts the rest off.
-        conn.notifications.append(bytes(payload[: conn.mtu - 3]))
-
-    def _require_active(self):
-        if not self._active:
-            raise OSError(_ENODEV)
-
-    def _require_handle(self, value_handle):
-        self._require_active()
-        if value_handle not in self.values:
-            raise ValueError("invalid attribute handle %r" % (value_handle,))
-
-    def _event(self, event, data):
-        if self.irq_handler is not None:
-            return self.irq_handler(event, data)
-        return None
-
-
-_radio = [_Radio()]
-
-
-def BLE():
-    """The radio, one per chip as on the hub."""
-    return _radio[0]
-
-
-def reset():
-    _radio[0] = _Radio()
-
+FLAG_NOTIFY = _model.FLAG_NOTIFY
+FLAG_WRITE = _model.FLAG_WRITE
+FLAG_WRITE_NO_RESPONSE = _model.FLAG_WRITE_NO_RESPONSE
+IRQ_MTU_EXCHANGED = _model.IRQ_MTU_EXCHANGED
+IRQ_GATTS_WRITE = _model.IRQ_GATTS_WRITE
+UUID = _model.UUID
+reset = _model.reset
 
 # --- the test's side: the central ----------------------------------------------------
 
 
 def radio():
-    return _radio[0]
+    return _model.BLE()
 
 
 def connect(conn_handle=0, addr=b"\xaa\xbb\xcc\xdd\xee\xff", racing=False):
@@ -249,26 +28,22 @@ def connect(conn_handle=0, addr=b"\xaa\xbb\xcc\xdd\xee\xff", racing=False):
     `racing=True`: this central answered the same advert as one that connected just before it,
     so it gets a link although advertising has already stopped.
     """
-    ble = _radio[0]
+    ble = radio()
     if not ble._active:
         raise AssertionError("a central cannot connect: the hub's radio is off")
     if ble.advertising is None and not racing:
         raise AssertionError("a central cannot connect: the hub is not advertising")
-    ble.advertising = None
-    ble.connections[conn_handle] = _Connection(conn_handle, addr)
-    ble._event(IRQ_CENTRAL_CONNECT, (conn_handle, 0, addr))
+    ble.accept(conn_handle, addr)
     return conn_handle
 
 
 def disconnect(conn_handle=0):
-    ble = _radio[0]
-    conn = ble.connections.pop(conn_handle)
-    ble._event(IRQ_CENTRAL_DISCONNECT, (conn_handle, 0, conn.addr))
+    radio().drop(conn_handle)
 
 
 def exchange_mtu(conn_handle, central_mtu):
     """ATT MTU exchange: both sides settle on the smaller of their preferred MTUs."""
-    ble = _radio[0]
+    ble = radio()
     conn = ble.connections[conn_handle]
     conn.mtu = min(central_mtu, ble.preferred_mtu)
     ble._event(IRQ_MTU_EXCHANGED, (conn_handle, conn.mtu))
@@ -277,7 +52,7 @@ def exchange_mtu(conn_handle, central_mtu):
 
 def write(conn_handle, uuid, data):
     """The central writes `data` to the characteristic `uuid` (at most MTU - 3 bytes per write)."""
-    ble = _radio[0]
+    ble = radio()
     conn = ble.connections[conn_handle]
     data = bytes(data)
     if len(data) > conn.mtu - 3:
@@ -292,7 +67,7 @@ def write(conn_handle, uuid, data):
 
 def write_stream(conn_handle, uuid, data):
     """Write `data` as a host does: split into MTU - 3 sized writes."""
-    conn = _radio[0].connections[conn_handle]
+    conn = radio().connections[conn_handle]
     size = conn.mtu - 3
     for start in range(0, len(data), size):
         write(conn_handle, uuid, data[start : start + size])
@@ -300,7 +75,7 @@ def write_stream(conn_handle, uuid, data):
 
 def handle_of(uuid):
     wanted = UUID(uuid)
-    for _service, entries in _radio[0].services:
+    for _service, entries in radio().services:
         for char_uuid, _flags, value_handle in entries:
             if char_uuid == wanted:
                 return value_handle
@@ -309,7 +84,7 @@ def handle_of(uuid):
 
 def flags_of(uuid):
     wanted = UUID(uuid)
-    for _service, entries in _radio[0].services:
+    for _service, entries in radio().services:
         for char_uuid, flags, _value_handle in entries:
             if char_uuid == wanted:
                 return flags
@@ -317,7 +92,7 @@ def flags_of(uuid):
 
 
 def notifications(conn_handle=0):
-    return _radio[0].connections[conn_handle].notifications
+    return radio().connections[conn_handle].notifications
 
 
 def received(conn_handle=0):
@@ -328,7 +103,7 @@ def received(conn_handle=0):
 def limit_notifications(count):
     """Accept `count` more notifications, then fail with ENOMEM as NimBLE does when its buffers are
     full; None lifts the limit (the controller drained its queue)."""
-    _radio[0].notify_budget = count
+    radio().notify_budget = count
 
 
 def ad_fields(payload):
@@ -346,7 +121,7 @@ def ad_fields(payload):
 
 def advertised_fields():
     """AD fields of the advertisement and the scan response together."""
-    adv = _radio[0].advertising
+    adv = radio().advertising
     if adv is None:
         return []
     return ad_fields(adv[1]) + ad_fields(adv[2])

@@ -8,8 +8,8 @@ CPython's.
 import sys
 
 if sys.implementation.name == "micropython":
-    from shim import board, esp32, machine, mptime, neopixel, virtual_clock
+    from shim import bluetooth, board, esp32, machine, mptime, neopixel, virtual_clock
 else:
-    from openbricks_sim.shim import board, esp32, machine, mptime, neopixel, virtual_clock
+    from openbricks_sim.shim import bluetooth, board, esp32, machine, mptime, neopixel, virtual_clock
 
-__all__ = ("board", "esp32", "machine", "mptime", "neopixel", "virtual_clock")
+__all__ = ("bluetooth", "board", "esp32", "machine", "mptime", "neopixel", "virtual_clock")
