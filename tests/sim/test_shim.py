@@ -172,22 +172,6 @@ def test_the_native_module_carries_the_cores_and_the_serial_bus_engine(sim):
         assert _openbricks_native.serial_bus(1) is sim.serial_bus(1)
 
 
-def test_the_shim_has_only_the_esp32_hardware_timers_and_one_alarm_per_id(sim):
-    with Shim(sim):
-        import time
-
-        import machine
-
-        with pytest.raises(ValueError, match=r"Timer\(-1\) doesn't exist"):
-            machine.Timer(-1)  # the ESP32 port has no virtual timers
-        seen = []
-        machine.Timer(2).init(period=10, callback=lambda _t: seen.append("first"))
-        machine.Timer(2).init(period=10, callback=lambda _t: seen.append("second"))
-        time.sleep_ms(25)
-        machine.Timer(2).deinit()
-        assert seen == ["second", "second"]
-
-
 def test_a_failing_timer_callback_is_printed_and_the_timer_keeps_firing(sim, capsys):
     with Shim(sim):
         import time
@@ -206,15 +190,6 @@ def test_a_failing_timer_callback_is_printed_and_the_timer_keeps_firing(sim, cap
         timer.deinit()
         assert fired == [10, 20, 30]
     assert capsys.readouterr().out.count("ValueError: callback bug") == 3
-
-
-def test_pin_irq_takes_only_what_the_esp32_port_takes(sim):
-    with Shim(sim):
-        import machine
-
-        pin = machine.Pin(7, machine.Pin.IN)
-        with pytest.raises(TypeError):
-            pin.irq(lambda _p: None, machine.Pin.IRQ_RISING, hard=True)
 
 
 def test_scheduled_callbacks_run_later_and_a_full_queue_refuses_more(sim):
