@@ -18,7 +18,7 @@ from tests.server.flash.images import build_image
 pytestmark = pytest.mark.e2e
 
 BOARDS = 20
-STARTING_AT_ONCE = 4  # boards booting together (a busy machine is slow to start twenty at once)
+STARTING_AT_ONCE = 2  # boards booting together (a busy machine is slow to start twenty at once)
 JOB_TIMEOUT_S = 180
 
 
