@@ -397,7 +397,7 @@ class UART:
                 return None
         n = waiting if n is None else min(n, waiting)
         out = bytes(self._rx[:n])
-        del self._rx[:n]
+        self._rx = self._rx[n:]  # MicroPython bytearrays do not support slice deletion
         return out
 
     def readinto(self, buf, nbytes=None):
