@@ -113,22 +113,27 @@ def _cell(value, width, decimals=None) -> str:
 def write_csv(path: str, rows: list[SeedRow]) -> None:
     """One line per seed; the world's whole score dict as JSON in the last column."""
     with open(path, "w", newline="", encoding="utf-8") as f:
-        writer = csv.writer(f)
-        writer.writerow(CSV_COLUMNS)
-        for row in rows:
-            result, pose = row.result, row.result.pose or {}
-            error = (result.error or "").strip().splitlines()
-            writer.writerow(
-                [
-                    row.seed,
-                    result.exit,
-                    row.headline,
-                    result.sim_ms / 1000,
-                    pose.get("x_mm"),
-                    pose.get("y_mm"),
-                    pose.get("heading_deg"),
-                    result.wall_s,
-                    error[-1] if error else "",
-                    json.dumps(result.score),
-                ]
-            )
+        write_csv_to(f, rows)
+
+
+def write_csv_to(stream, rows: list[SeedRow]) -> None:
+    """write_csv's lines into an open text stream (the console answers with them)."""
+    writer = csv.writer(stream)
+    writer.writerow(CSV_COLUMNS)
+    for row in rows:
+        result, pose = row.result, row.result.pose or {}
+        error = (result.error or "").strip().splitlines()
+        writer.writerow(
+            [
+                row.seed,
+                result.exit,
+                row.headline,
+                result.sim_ms / 1000,
+                pose.get("x_mm"),
+                pose.get("y_mm"),
+                pose.get("heading_deg"),
+                result.wall_s,
+                error[-1] if error else "",
+                json.dumps(result.score),
+            ]
+        )

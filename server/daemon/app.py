@@ -35,7 +35,17 @@ from openbricks_server.daemon.routers import events as events_router
 from openbricks_server.daemon.routers import flash as flash_router
 from openbricks_server.daemon.routers import hubs as hubs_router
 from openbricks_server.daemon.routers import jobs as jobs_router
-from openbricks_server.daemon.routers import pages, programs, runs, serial, servos, sim, sim_view, system
+from openbricks_server.daemon.routers import (
+    pages,
+    programs,
+    runs,
+    serial,
+    servos,
+    sim,
+    sim_sweeps,
+    sim_view,
+    system,
+)
 from openbricks_server.daemon.store import Store, now_ms
 
 
@@ -56,6 +66,7 @@ class DaemonContext:
     sim: Any = None  # the SimJobs (sim runs), once its service has started
     jobs: Any = None  # the JobRegistry (flash, servo jobs), once its service has started
     flash: Any = None  # the FlashJobs
+    sweeps: Any = None  # the SweepJobs (seed sweeps)
     started_ms: int = field(default_factory=now_ms)
 
 
@@ -104,14 +115,16 @@ async def sim_jobs(ctx: DaemonContext) -> AsyncIterator[None]:
 
 @asynccontextmanager
 async def job_runner(ctx: DaemonContext) -> AsyncIterator[None]:
-    """Runs jobs (flash, servo scans); jobs a previous daemon left unfinished are marked failed first.
-    At shutdown, jobs still running are cancelled (an esptool mid-write is killed)."""
+    """Runs jobs (flash, servo scans, seed sweeps); jobs a previous daemon left unfinished are marked
+    failed first. At shutdown, jobs still running are cancelled (an esptool mid-write is killed)."""
     from openbricks_server.daemon.jobs.flash import FlashJobs
     from openbricks_server.daemon.jobs.registry import JobRegistry
+    from openbricks_server.daemon.sim.sweeps import SweepJobs
 
     ctx.store.jobs.mark_interrupted()
     ctx.jobs = JobRegistry(ctx.store, ctx.events)
     ctx.flash = FlashJobs(ctx.jobs, ctx.config.resolved_data_dir, ctx.config.flash_parallel)
+    ctx.sweeps = SweepJobs(ctx.jobs)
     try:
         yield
     finally:
@@ -127,6 +140,7 @@ ROUTERS = [
     events_router.router,
     hubs_router.router,
     sim.router,
+    sim_sweeps.router,
     jobs_router.router,
     serial.router,
     flash_router.router,

@@ -15,6 +15,7 @@ router = APIRouter(prefix="/jobs", tags=["jobs"], dependencies=[Depends(require_
 
 _ULID = re.compile(r"^[0-9A-HJKMNP-TV-Z]{26}$")
 MAX_WAIT_S = 600.0
+_LISTINGS = {"flash": "GET /api/flash", "sim_sweep": "GET /api/sim/sweeps"}
 JobRef = Path(description="the job's id, as POST answered it", max_length=40)
 WaitQuery = Query(
     0.0,
@@ -52,7 +53,7 @@ async def find_job(request: Request, job_id: str, kind: str | None, wait_s: floa
     jobs = registry(request)
     found = jobs.get(job_id) if _ULID.match(job_id) else None
     if found is None or (kind is not None and found["kind"] != kind):
-        listing = f"GET /api/{'flash' if kind == 'flash' else 'jobs'}"
+        listing = _LISTINGS.get(kind, "GET /api/jobs")
         raise ApiError.not_found(f"job {job_id!r}", f"{listing} lists the recent ones")
     if wait_s > 0:
         await jobs.wait(job_id, wait_s)
