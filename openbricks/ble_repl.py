@@ -29,6 +29,7 @@ import micropython
 from micropython import const
 
 from openbricks import bluetooth as _settings
+from openbricks import timers
 
 NUS_SERVICE_UUID = "6E400001-B5A3-F393-E0A9-E50E24DCCA9E"
 NUS_RX_UUID = "6E400002-B5A3-F393-E0A9-E50E24DCCA9E"  # central -> hub (REPL input)
@@ -42,7 +43,8 @@ RX_BUFFER_BYTES = const(4352)  # two 2 KB raw-paste windows in flight, plus a wr
 PUMP_MS = const(20)
 CONNECT_GRACE_MS = const(1000)
 DUPTERM_SLOT = const(0)
-DEFAULT_TIMER_ID = const(2)  # 0: launcher, 1: BLE button
+DEFAULT_TIMER_ID = timers.BLE_REPL
+_TIMER_ROLE = "BLE REPL pump"
 
 _IRQ_CENTRAL_CONNECT = const(1)
 _IRQ_CENTRAL_DISCONNECT = const(2)
@@ -205,6 +207,8 @@ class _Bridge:
         ((self._tx_handle, self._rx_handle),) = ble.gatts_register_services((service,))
         ble.gatts_set_buffer(self._rx_handle, RX_BUFFER_BYTES, True)
         self._previous_term = os.dupterm(self.stream, DUPTERM_SLOT)
+        timers.claim(timer_id, _TIMER_ROLE, "pass timer_id= to ble_repl.start()")
+        self._timer_id = timer_id
         self._timer = machine.Timer(timer_id)
         self._timer.init(mode=machine.Timer.PERIODIC, period=PUMP_MS, callback=_pump_tick)
         self._adv = advertising_payloads(name)
@@ -219,6 +223,7 @@ class _Bridge:
         if self._timer is not None:
             self._timer.deinit()
             self._timer = None
+            timers.release(self._timer_id, _TIMER_ROLE)
         ble = self._ble
         for step in (self._drop_link, self._stop_advertising):
             try:

@@ -20,10 +20,11 @@ import time
 
 from micropython import const
 
-from openbricks import bluetooth
+from openbricks import bluetooth, timers
 
 DEFAULT_POLL_MS = const(50)
-DEFAULT_TIMER_ID = const(1)  # 0: launcher, 2: BLE REPL pump
+DEFAULT_TIMER_ID = timers.BLUETOOTH_BUTTON
+_TIMER_ROLE = "Bluetooth button"
 DEFAULT_COLOR_ON = (0, 0, 255)  # blue
 # A WS2812's green die is much brighter than its red one: (255, 255, 0) reads as lime, this as yellow.
 DEFAULT_COLOR_OFF = (255, 160, 0)
@@ -119,6 +120,7 @@ class BluetoothToggleButton:
         self._streak = 0
         _pending_ack[0] = _ACK_NONE
         bluetooth.add_state_listener(self._on_state)
+        timers.claim(self._timer_id, _TIMER_ROLE, "pass timer_id= to BluetoothButton()")
         self._timer = machine.Timer(self._timer_id)
         self._timer.init(mode=machine.Timer.PERIODIC, period=self._poll_ms, callback=self._tick)
         _running_watcher[0] = self
@@ -131,6 +133,7 @@ class BluetoothToggleButton:
             return
         self._timer.deinit()
         self._timer = None
+        timers.release(self._timer_id, _TIMER_ROLE)
         if _running_watcher[0] is self:
             _running_watcher[0] = None
         bluetooth.remove_state_listener(self._on_state)

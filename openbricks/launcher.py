@@ -47,12 +47,13 @@ import time
 import machine
 
 import openbricks
-from openbricks import _native, estop, log, pins
+from openbricks import _native, estop, log, pins, timers
 
 DEFAULT_PROGRAM_PATH = "/program.mpy"
 DEFAULT_BUTTON_PIN = 39
 DEFAULT_POLL_MS = 50
-DEFAULT_TIMER_ID = 0
+DEFAULT_TIMER_ID = timers.LAUNCHER
+_TIMER_ROLE = "launcher"
 
 _running = [False]  # hub-wide "a program is running", read by the status LED on every tick
 _listeners = []
@@ -350,6 +351,8 @@ class Launcher:
 
     def start_watcher(self, timer_id=DEFAULT_TIMER_ID):
         """Poll the button from a periodic hardware timer, for the rest of the uptime."""
+        timers.claim(timer_id, _TIMER_ROLE, "pass timer_id= to launcher.start()")
+        self._timer_id = timer_id
         self._timer = machine.Timer(timer_id)
         self._timer.init(mode=machine.Timer.PERIODIC, period=self.poll_ms, callback=self._on_timer)
 
@@ -613,6 +616,7 @@ def shutdown():
     _launcher[0] = None
     if launcher._timer is not None:
         launcher._timer.deinit()
+        timers.release(launcher._timer_id, _TIMER_ROLE)
     if launcher.button_pin is not None:
         pins.release(launcher.button_pin, "launcher")
 

@@ -7,8 +7,8 @@ can be saved to NVS so the next boot starts corrected. The integrator is the
 C core (`_openbricks_native.ImuYaw`) when the firmware or host extension has
 it, the same algorithm in Python otherwise.
 
-Samples are taken on a periodic `machine.Timer` (`timer_id`; the runtime
-uses 0 for the launcher, 1 for the BLE button, 2 for the BLE REPL pump). With
+Samples are taken on a periodic `machine.Timer` (`timer_id`, by default the
+hardware timer `openbricks.timers` assigns to the IMU, claimed there). With
 `timer_id=None` no timer is taken and every heading()/gyro() call samples
 instead, for a caller that polls fast enough (>= 10 Hz: longer gaps are not
 integrated, since the motion in between is unknown).
@@ -23,7 +23,7 @@ import time
 from machine import SPI, Pin, Timer
 from micropython import const
 
-from openbricks import _native, pins
+from openbricks import _native, pins, timers
 from openbricks.interfaces import HeadingFrame
 
 _ACCEL_DATA = const(0x00)
@@ -59,6 +59,7 @@ _MAX_BIAS_DPS = 5.0
 _MAX_GAP_US = const(100_000)
 # Every this many timer samples the driver checks it still owns its pins (see _on_timer).
 _OWNERSHIP_CHECK_SAMPLES = const(20)
+_TIMER_ROLE = "ICM-45686 sampling"
 
 
 class ICM45686(HeadingFrame):
@@ -72,7 +73,17 @@ class ICM45686(HeadingFrame):
     HEADING_SOURCE = "ICM-45686"
 
     def __init__(
-        self, sck, mosi, miso, cs, hz=8_000_000, mode=3, scale=-1.0, timer_id=3, sample_hz=200, spi_id=1
+        self,
+        sck,
+        mosi,
+        miso,
+        cs,
+        hz=8_000_000,
+        mode=3,
+        scale=-1.0,
+        timer_id=timers.IMU,
+        sample_hz=200,
+        spi_id=1,
     ):
         if scale == 0:
             raise ValueError("scale must be non-zero: -1.0 for a face-up ICM-45686, +1.0 face-down")
@@ -108,7 +119,9 @@ class ICM45686(HeadingFrame):
         self._seed_from_nvs()
         self._timer = None
         self._until_ownership_check = _OWNERSHIP_CHECK_SAMPLES
+        self._timer_id = timer_id
         if timer_id is not None:
+            timers.claim(timer_id, _TIMER_ROLE, "pass timer_id= to ICM45686() (None samples on each read)")
             self._timer = Timer(timer_id)
             self._timer.init(mode=Timer.PERIODIC, period=max(1, 1000 // sample_hz), callback=self._on_timer)
 
@@ -161,6 +174,7 @@ class ICM45686(HeadingFrame):
             if owner is None or owner[1] is not self:
                 timer.deinit()
                 self._timer = None
+                timers.release(self._timer_id, _TIMER_ROLE)
                 return
         self._sample()
 
@@ -245,6 +259,7 @@ class ICM45686(HeadingFrame):
         if self._timer is not None:
             self._timer.deinit()
             self._timer = None
+            timers.release(self._timer_id, _TIMER_ROLE)
         for pin in self._pins:
             pins.release(pin, self)
 

@@ -13,15 +13,15 @@ import time
 
 from micropython import const
 
-from openbricks import _native
+from openbricks import _native, timers
 
 _TICK_HZ = const(1000)
 # Long enough for at least two ticks of a running 1 kHz tick, even with a late one in between.
 _PROBE_MS = const(5)
-# Only hosts without a native tick reach the fallback (the ESP32 firmware ticks itself). The ESP32
-# port has no virtual timers, only hardware timers 0..3, each owned by one user: 0 launcher, 1 BLE
-# button, 2 BLE REPL pump, 3 IMU sampling. The BLE button's is taken because no such host runs one.
-_TIMER_ID = const(1)
+# Only hosts without a native tick reach the fallback (the ESP32 firmware ticks itself). It takes the
+# Bluetooth button's hardware timer (see openbricks.timers) because no such host runs that button.
+_TIMER_ID = timers.BLUETOOTH_BUTTON
+_TIMER_ROLE = "motor_process tick"
 
 _state = {"timer": None}
 
@@ -52,6 +52,7 @@ def ensure_running():
     from machine import Timer
 
     timer = _state["timer"]
+    timers.claim(_TIMER_ID, _TIMER_ROLE)
     if timer is None:
         timer = _state["timer"] = Timer(_TIMER_ID)
     timer.init(mode=Timer.PERIODIC, freq=_TICK_HZ, callback=_tick)
@@ -63,3 +64,4 @@ def stop():
     timer = _state["timer"]
     if timer is not None:
         timer.deinit()
+        timers.release(_TIMER_ID, _TIMER_ROLE)

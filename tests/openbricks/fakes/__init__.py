@@ -63,11 +63,14 @@ def reset():
     machine.board.reset()
     bluetooth.reset()
     dupterm.reset()
-    # Runtime state one test's drivers leave behind (GPIO claims, an engaged e-stop and its halt
+    # Runtime state one test's drivers leave behind (GPIO and timer claims, an engaged e-stop and its halt
     # callbacks) must not leak into the next test.
     pins = sys.modules.get("openbricks.pins")
     if pins is not None:
         pins.reset_claims()
+    timers = sys.modules.get("openbricks.timers")
+    if timers is not None:
+        timers.reset_claims()
     estop = sys.modules.get("openbricks.estop")
     if estop is not None:
         estop.clear(0)
