@@ -18,9 +18,10 @@ import threading
 _set_async_exc = ctypes.PYFUNCTYPE(ctypes.c_int, ctypes.c_ulong, ctypes.py_object)(
     ("PyThreadState_SetAsyncExc", ctypes.pythonapi)
 )
-_clear_async_exc = ctypes.PYFUNCTYPE(ctypes.c_int, ctypes.c_ulong, ctypes.c_void_p)(
-    ("PyThreadState_SetAsyncExc", ctypes.pythonapi)
-)
+
+
+class _Withdrawn(BaseException):
+    """Stands in for an interrupt being withdrawn, and is taken by the gate itself (close())."""
 
 
 class InterruptGate:
@@ -55,14 +56,29 @@ class InterruptGate:
     def close(self):
         """Hub code ended: no interrupt may reach this thread any more, including one in flight.
 
-        Retries if the in-flight exception lands inside this very call, so on return the thread is
-        clean whatever the timing.
+        The interrupt in flight is withdrawn by replacing it with one of our own and taking that
+        here (a plain PyThreadState_SetAsyncExc(id, NULL) leaves the interpreter's "async
+        exception pending" signal set for good, and CPython 3.11, while a profile function such as
+        the simulator's Python-time charge is installed, then loops forever at the entry of the
+        next Python function). Retries if the exception lands elsewhere inside this very call, so
+        on return the thread is clean whatever the timing.
         """
+        if threading.get_ident() != self._thread_id:
+            raise RuntimeError("InterruptGate.close() is for the thread that runs the hub code")
         while True:
             try:
                 with self._lock:
                     self._open = False
-                    _clear_async_exc(self._thread_id, None)
+                    _set_async_exc(self._thread_id, _Withdrawn)
+                    try:
+                        while True:  # the check at this backward jump raises it
+                            pass
+                    except _Withdrawn:
+                        pass
+                    self.wakeup.clear()
+                return
+            except _Withdrawn:  # taken just outside the loop: the signal is consumed all the same
+                with self._lock:
                     self.wakeup.clear()
                 return
             except BaseException:  # the interrupt being withdrawn arrived first

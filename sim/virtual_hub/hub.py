@@ -23,6 +23,7 @@ import time
 from dataclasses import dataclass
 
 from ..program_robot import ProgramRobot
+from ..python_cost import PythonCost
 from ..shim import micropython as shim_micropython
 from . import frozen
 from .console import ConsoleIn, ConsoleOut, make_input
@@ -235,14 +236,17 @@ class VirtualHub:
     def _run(self, code):
         """Run compiled hub code behind the interrupt gate; returns the exception it ended with."""
         outcome = None
+        cost = PythonCost(self.world.clock)  # spinning code lets time pass, as on a hub
         try:
             try:
                 self.gate.open()
-                self.python.run(code)
+                with cost:
+                    self.python.run(code)
             except BaseException as exc:  # whatever hub code raised is its result
                 outcome = exc
             finally:
                 self.gate.close()
+                cost.uninstall()  # again: an interrupt that landed in the with's exit skipped it
         except BaseException as late:  # an interrupt that landed as the code ended
             outcome = outcome or late
         if isinstance(outcome, HubShutdown) or self._closing.is_set():

@@ -189,6 +189,36 @@ def test_ctrl_c_stops_a_running_loop_and_the_hub_answers_after(host):
     assert out == "alive True\r\n" and not err
 
 
+BUSY_WAIT_DRIVE = """\
+from openbricks.drivers.st3032 import ST3032Motor
+from openbricks.robotics import DriveBase
+db = DriveBase(ST3032Motor(1), ST3032Motor(2, invert=True), wheel_diameter_mm=88, axle_track_mm=138)
+db.straight(100, wait=False)
+while not db.done():
+    pass
+print("drove", round(db.distance()))
+"""
+
+
+def test_a_busy_wait_on_done_finishes_because_python_costs_hub_time(host):
+    """As on a hub (and in `sim run`), code that spins without sleeping lets the robot move."""
+    out, err = host.exec_raw(BUSY_WAIT_DRIVE, timeout_s=60)
+    assert out == "drove 100\r\n" and not err
+
+
+def test_ctrl_c_twice_with_python_costing_time_leaves_the_hub_answering(host):
+    """The Ctrl-C path once hung with the Python-time charge on: the next code never started."""
+    for _ in range(2):
+        host.write(b"x = 0\nwhile True:\n    x += 1\n    abs(x)\n\x04")
+        assert host.read_exactly(2) == b"OK"
+        time.sleep(0.3)
+        host.write(b"\x03")
+        host.read_until(b"\x04")
+        assert "KeyboardInterrupt" in host.read_until(b"\x04").decode()
+        host.read_until(b">")
+        assert host.exec_raw("print('alive', x > 0)", timeout_s=10) == ("alive True\r\n", "")
+
+
 def test_a_busy_loop_that_never_sleeps_is_interrupted_too(host):
     host.write(b"x = 0\nwhile True:\n    x += 1\n\x04")
     assert host.read_exactly(2) == b"OK"
@@ -255,7 +285,9 @@ def test_every_run_starts_from_the_worlds_start_pose(hub, host):
         poses.append(hub.control("status")["pose"])
     # Without the reset the robot would end 1.5 s of driving further on at every run.
     assert all(300 < pose["x_mm"] < 500 for pose in poses), poses
-    assert abs(poses[2]["x_mm"] - poses[1]["x_mm"]) < 5 and abs(poses[2]["y_mm"] - poses[1]["y_mm"]) < 5
+    # Python costs hub time, and the launcher's own work before the program (its run log's slot)
+    # differs a little from run to run, so the wheels start at slightly different instants.
+    assert abs(poses[2]["x_mm"] - poses[1]["x_mm"]) < 15 and abs(poses[2]["y_mm"] - poses[1]["y_mm"]) < 15
 
 
 def test_upload_then_start_with_the_program_button(hub, host):
