@@ -12,7 +12,7 @@ from __future__ import annotations
 from benchmarks import Row
 from benchmarks._native_bench import run_c_benchmark
 
-CORES = ("serial_bus", "scs", "servo", "trajectory", "observer")  # servo: the slots' st_move_core
+CORES = ("serial_bus", "scs", "servo", "control", "trajectory", "observer")  # servo: the slots' st_move_core
 TICK_US = 1000
 
 
