@@ -106,8 +106,17 @@ def test_twenty_boards_flash_at_once_each_with_progress_and_a_result_and_a_bad_p
     assert len(writes) == BOARDS and all(call[-2] == "0x0" for call in writes)
 
 
-def test_the_clis_safety_gates_fail_the_job_before_anything_is_written(daemon, boards, fake_esptool):
-    board = boards[0]
+@pytest.fixture
+def fresh_board(tmp_path):
+    """A board of its own: the shared ones restart after each flash, and one that does not answer in time
+    reads as a blank chip (no version to compare)."""
+    board = HubProcess("FreshBoard", tmp_path / "boards")
+    yield board
+    board.stop()
+
+
+def test_the_clis_safety_gates_fail_the_job_before_anything_is_written(daemon, fresh_board, fake_esptool):
+    board = fresh_board
     with daemon.client() as client:
         same = upload(client, version="2.7.1", filename="openbricks-esp32s3-firmware-2.7.1.bin")
         classic = upload(client, chip="esp32")
