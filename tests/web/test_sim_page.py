@@ -1,0 +1,59 @@
+"""The Simulator page in Debian's Chromium against a real `openbricks console`: a stored program started
+from the page runs in a simulator child process, its 3D view (viser, through the console's port) draws
+in the page, the finished run turns into its replay, and a sweep started from the page reports every
+seed; a viewer can start nothing."""
+
+from __future__ import annotations
+
+import pytest
+
+from tests.web.conftest import screenshot
+
+pytestmark = pytest.mark.e2e
+
+DRIVE = """\
+from openbricks.drivers.st3032 import ST3032Motor
+from openbricks.robotics import DriveBase
+
+left = ST3032Motor(servo_id=1, uart_id=1, tx=14, rx=41)
+right = ST3032Motor(servo_id=2, uart_id=1, tx=14, rx=41, invert=True)
+db = DriveBase(left, right, wheel_diameter_mm=88, axle_track_mm=138)
+print("driving")
+db.straight(150)
+print("arrived")
+"""
+RUN_S = 180_000  # a simulator child starts in seconds here, more on a loaded machine
+
+
+def test_a_run_started_on_the_page_draws_its_view_then_replays_and_a_sweep_reports_each_seed(
+    console, page_for
+):
+    with console.api() as api:
+        api.put("/api/programs/drive.py", json={"source": DRIVE}).raise_for_status()
+    page = page_for(console.url)
+    page.goto(f"{console.base}/#/sim")
+    page.locator("select").select_option("drive.py")
+    page.get_by_role("button", name="Start simulation").click()
+
+    view = page.frame_locator("iframe[title='3D view']")
+    view.locator("canvas").first.wait_for(timeout=RUN_S)
+    page.get_by_role("link", name="Replay").wait_for(timeout=RUN_S)  # the run ended
+    assert "done" in page.locator(".runbar").inner_text()
+    page.frame_locator("iframe[title='3D view']").locator("canvas").first.wait_for(timeout=RUN_S)
+    screenshot(page, "sim-replay")
+    with console.api() as api:
+        (run,) = api.get("/api/sim/runs").json()
+    assert run["exit"] == "finished" and run["program_name"] == "drive.py"
+
+    page.fill("input[placeholder='1-50']", "1-2")
+    page.get_by_role("button", name="Start sweep").click()
+    row = page.locator(".sweeps tbody tr").first
+    row.wait_for(timeout=RUN_S)
+    page.locator(".sweeps tbody tr", has_text="done").wait_for(timeout=RUN_S)
+    assert "100 %" in row.inner_text()
+    screenshot(page, "sim-sweep")
+    assert page.errors == [], page.errors
+
+    viewer = page_for(console.sign_in_url(console.mint("viewer"), "sim"))
+    assert viewer.get_by_role("button", name="Start simulation").is_disabled()
+    assert viewer.get_by_role("button", name="Start sweep").is_disabled()
