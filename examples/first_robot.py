@@ -20,4 +20,4 @@ db = DriveBase(left, right, wheel_diameter_mm=88, axle_track_mm=138)
 db.straight(500)  # forward 500 mm
 db.turn(180)  # turn round, to the right
 db.straight(500)  # and back
-print("home again after %d mm" % db.distance())
+print("home again after %.0f mm" % db.distance())

@@ -35,4 +35,4 @@ for side in range(4):
     db.straight(200)
     db.turn(90)
 show("done")
-print("done: %d mm, %d deg" % (db.distance(), db.angle()))
+print("done: %.0f mm, %.0f deg" % (db.distance(), db.angle()))

@@ -80,8 +80,10 @@ def test_rounded_square_comes_back_round(tmp_path):
     result = run_example(EXAMPLES / "drivebase_curve.py", tmp_path)
     pose = result["pose"]
     # Eight chained segments with no stop between them: a looser close than the pivoting square's.
+    # Each segment starts when the program's Python gets to it, and Python costs simulated time as on a
+    # hub, so how the runtime reaches the cores moves the close by tenths of a degree.
     assert math.hypot(pose["x_mm"], pose["y_mm"]) < 15.0
-    assert heading_error_deg(pose["heading_deg"], 0.0) < 3.0
+    assert heading_error_deg(pose["heading_deg"], 0.0) < 3.5
 
 
 def test_gyro_square_drifts_under_a_degree(tmp_path):
