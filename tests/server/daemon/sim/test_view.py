@@ -20,10 +20,10 @@ from websockets.exceptions import InvalidStatus
 from websockets.sync.client import connect
 
 from tests.server.daemon.routers.test_sim import ended, save, start, wait_until
+from tests.web.conftest import browser  # noqa: F401 - Debian's Chromium, the fixture
 
 pytestmark = pytest.mark.e2e
 
-CHROMIUM = "/usr/bin/chromium"
 ARTIFACTS = Path(__file__).resolve().parents[4] / "build" / "artifacts" / "sim"
 DRAW_TIMEOUT_S = 90.0
 SCREENSHOT_TIMEOUT_S = 120.0  # software WebGL on a loaded machine takes its time over one frame
@@ -106,21 +106,11 @@ def robot_track(recording: bytes) -> list[np.ndarray]:
     return track
 
 
-@pytest.fixture(scope="module")
-def browser():
-    from playwright.sync_api import sync_playwright
-
-    assert Path(CHROMIUM).exists(), "Debian's chromium is needed: `make setup` installs it (APT_PACKAGES)"
-    with sync_playwright() as p:
-        b = p.chromium.launch(executable_path=CHROMIUM, args=["--disable-gpu"])
-        try:
-            yield b
-        finally:
-            b.close()
-
-
 def test_the_view_is_served_through_the_daemon_only_and_replays_where_the_run_ended(
-    daemon, operator, viewer_token, browser
+    daemon,
+    operator,
+    viewer_token,
+    browser,  # noqa: F811 - the fixture, used
 ):
     save(operator, "park.py", DRIVE_THEN_PARK)
     run = start(operator, program="park.py", world="empty", speed=1.0, limit_ms=600_000)
