@@ -125,15 +125,20 @@ class Pacer:
             return
         now = time.perf_counter()
         previous, self._last_tick = self._last_tick, (now, self._clock.now_us())
-        if self._on_frame is not None and (
-            self._last_frame_s is None or now - self._last_frame_s >= _FRAME_SLACK / self._frame_hz
-        ):
-            self._last_frame_s = now
-            self._on_frame()
-        self._hold()
-        if self._running:
-            self._rate_from = previous
-            self._schedule()
+        try:
+            if self._on_frame is not None and (
+                self._last_frame_s is None or now - self._last_frame_s >= _FRAME_SLACK / self._frame_hz
+            ):
+                self._last_frame_s = now
+                self._on_frame()
+            self._hold()
+        finally:
+            # An interrupt raised in the program's thread while it is held here (a host's Ctrl-C
+            # reaching a virtual hub) goes on to the program, but pacing must outlive it: a pacer
+            # that stopped rescheduling would leave the hub running flat out from then on.
+            if self._running:
+                self._rate_from = previous
+                self._schedule()
 
     def _hold(self) -> None:
         """Wait while paused, or until the wall clock catches up with simulated time."""

@@ -158,6 +158,27 @@ def test_an_interrupt_on_its_way_cuts_a_paced_wait_short(sim):
     assert not thread.is_alive() and time.perf_counter() - started < 0.5
 
 
+def test_pacing_goes_on_after_an_interrupt_raised_while_held(sim):
+    """A host's Ctrl-C reaches a virtual hub's program while the pacer holds it: the program ends,
+    and the hub's clock must still follow the wall clock afterwards, not run flat out."""
+
+    class Interrupted(Exception):
+        pass
+
+    frames = []
+
+    def interrupt_once():
+        frames.append(time.perf_counter())
+        if len(frames) == 2:
+            raise Interrupted
+
+    pacer = Pacer(sim.clock, interrupt_once, speed=1.0)
+    pacer.start()
+    with pytest.raises(Interrupted):
+        sim.clock.advance_us(1_000_000)
+    assert wall_time_to_advance(sim.clock, 500) == pytest.approx(0.5, rel=0.15, abs=0.03)
+
+
 def test_a_speed_that_is_not_a_positive_number_is_refused(sim):
     pacer = Pacer(sim.clock, FrameCounter())
     with pytest.raises(ValueError, match="positive real-time factor"):

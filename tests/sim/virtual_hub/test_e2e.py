@@ -318,6 +318,30 @@ def test_upload_then_start_with_the_program_button(hub, host):
     assert "started: button press" in log and "stopped: finished after" in log
 
 
+def hub_ticks_ms(host):
+    out, err = host.exec_raw("import time\nprint(time.ticks_ms())")
+    assert not err, err
+    return int(out)
+
+
+def test_an_idle_hub_keeps_to_real_time_after_hosts_interrupt_it(host):
+    """Every host that connects interrupts the launcher's idle loop with a Ctrl-C, often while the
+    hub is waiting for the wall clock to catch up; from then on the idle hub must still wait, not
+    run its physics flat out (a core each, and a clock that races ahead of its RTC)."""
+    for _ in range(3):
+        before = hub_ticks_ms(host)
+        host.write(b"import openbricks.host_calls as h\nh.idle()\x04")
+        assert host.read_exactly(2) == b"OK"
+        assert result_of(host.read_until(b"\n").decode())["idle"] is True
+        time.sleep(1.0)
+        host.write(b"\x03")
+        host.read_until(b"\x04")
+        host.read_until(b"\x04")
+        host.read_until(b">")
+        elapsed_ms = hub_ticks_ms(host) - before
+        assert 700 < elapsed_ms < 2500, f"1 s of wall time at the launcher took {elapsed_ms} ms of hub time"
+
+
 def test_run_logs_and_the_hub_name_survive_a_restart_of_the_hub(tmp_path):
     first = HubProcess(tmp_path / "RobotB", "RobotB", "--speed", "max")
     try:
