@@ -27,10 +27,12 @@ from ulid import ULID
 from openbricks import __version__
 from openbricks_server.daemon import errors
 from openbricks_server.daemon.auth import MUTATING_METHODS, Auth, AuthMiddleware, require_operator
+from openbricks_server.daemon.competition import Competition
 from openbricks_server.daemon.config import DaemonConfig
 from openbricks_server.daemon.events import EventBus
 from openbricks_server.daemon.recorder import INTERRUPTED_BY_CRASH, Recorder
 from openbricks_server.daemon.routers import auth as auth_router
+from openbricks_server.daemon.routers import competition as competition_router
 from openbricks_server.daemon.routers import events as events_router
 from openbricks_server.daemon.routers import flash as flash_router
 from openbricks_server.daemon.routers import hubs as hubs_router
@@ -62,6 +64,7 @@ class DaemonContext:
     events: EventBus
     hub_events: Recorder  # implements openbricks_server.daemon.hub_events.HubEvents
     auth: Auth
+    competition: Competition
     hubs: Any = None  # the HubManager, once its service has started
     sim: Any = None  # the SimJobs (sim runs), once its service has started
     jobs: Any = None  # the JobRegistry (flash, servo jobs), once its service has started
@@ -145,6 +148,7 @@ ROUTERS = [
     serial.router,
     flash_router.router,
     servos.router,
+    competition_router.router,
 ]
 
 
@@ -171,6 +175,7 @@ def create_app(config: DaemonConfig, services: Sequence[Service] | None = None) 
         events=bus,
         hub_events=Recorder(store, bus, config.flush_interval_s),
         auth=Auth(config, store),
+        competition=Competition(store, bus),
     )
     chosen = list(SERVICES if services is None else services)
 

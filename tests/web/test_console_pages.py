@@ -336,13 +336,30 @@ def test_telemetry_from_plot_is_drawn_live_and_kept_with_the_run(console, page_f
 def test_competition_mode_locks_uploads_while_a_run_is_on_and_keys_work(console, page_for):
     page = page_for(console.url)
     hubs = console.wait_hubs_idle(2)
-    name = hubs[0]["name"]
+    name, other = hubs[0]["name"], hubs[1]["name"]
+    try:
+        _competition_mode_locks_uploads(console, page_for, page, name, other)
+    finally:
+        with console.api() as api:  # the setting is the daemon's: leave it off for the next tests
+            api.put("/api/competition", json={"on": False}).raise_for_status()
+
+
+def _competition_mode_locks_uploads(console, page_for, page, name, other):
     page.check("header .comp input")
     page.get_by_role("button", name="Start match").click()
     timer = page.locator("[data-testid=match-timer]")
     first = timer.inner_text()
     page.wait_for_timeout(1200)
     assert timer.inner_text() != first, "the match timer does not run"
+    # The mode and its timer are the daemon's: a judge's page (a viewer) shows the same clock.
+    with console.api() as api:
+        assert api.get("/api/competition").json()["on"] is True
+    judge = page_for(console.sign_in_url(console.mint("viewer")))
+    judge.locator("[data-testid=match-timer]").wait_for()
+    assert judge.is_disabled("header .comp input") and judge.is_checked("header .comp input")
+    mine, theirs = timer.inner_text(), judge.locator("[data-testid=match-timer]").inner_text()
+    to_s = lambda clock: int(clock.split(":")[0]) * 60 + int(clock.split(":")[1])  # noqa: E731
+    assert abs(to_s(mine) - to_s(theirs)) <= 1, (mine, theirs)
 
     open_program(page, "forever.py", FOREVER)
     page.keyboard.press("Control+s")  # saved through the daemon
@@ -358,6 +375,11 @@ def test_competition_mode_locks_uploads_while_a_run_is_on_and_keys_work(console,
     assert page.is_disabled("[data-testid=run]")
     assert "Competition mode" in (page.get_attribute("[data-testid=run]", "title") or "")
     screenshot(page, "editor-competition-locked")
+    # What the page greys out, the daemon refuses: a script cannot upload to the other hub either.
+    with console.api() as api:
+        refused = api.post(f"/api/hubs/{other}/upload", json={"program": "forever.py"})
+    assert refused.status_code == 409 and refused.json()["error"] == "competition_locked"
+    assert f"{name} is running" in refused.json()["message"]
     page.keyboard.press("F6")  # stop the selected hub
     page.goto(page.url.split("#")[0] + "#/dashboard")
     tile.locator("[data-testid=hub-status]", has_text="idle").wait_for(timeout=15000)

@@ -92,4 +92,19 @@ describe("ConsoleModel", () => {
     expect(m.uploadLockReason).toMatch(/Competition mode/);
     expect(m.readOnlyReason).toBeNull(); // stopping stays possible
   });
+
+  it("takes competition mode from the daemon and runs its match timer on this computer's clock", () => {
+    const m = new ConsoleModel();
+    const before = Date.now();
+    // The daemon's clock is 60 s ahead of ours; its match started 10 s before it published the event.
+    const daemonNow = before + 60000;
+    m.applyEvent({ ...ev("competition", null, null, { on: true, match_s: 120, match_started_ms: daemonNow - 10000, changed_by: "local", changed_ms: daemonNow }), ts: daemonNow });
+    expect(m.competition.on).toBe(true);
+    expect(m.competition.matchSeconds).toBe(120);
+    const elapsed = Date.now() - (m.competition.matchStartedMs as number);
+    expect(elapsed).toBeGreaterThanOrEqual(10000);
+    expect(elapsed).toBeLessThan(10000 + 1000);
+    m.setCompetition({ on: false, match_s: 120, match_started_ms: null, changed_by: "local", changed_ms: 1, server_ms: 5 });
+    expect(m.competition).toEqual({ on: false, matchSeconds: 120, matchStartedMs: null });
+  });
 });

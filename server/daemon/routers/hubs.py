@@ -17,6 +17,7 @@ from pydantic import BaseModel, Field, model_validator
 
 from openbricks_server.compile import MAX_PROGRAM_BYTES, Program, ProgramError, compile_program
 from openbricks_server.daemon.auth import Caller, require_operator, require_viewer
+from openbricks_server.daemon.competition import unlocked
 from openbricks_server.daemon.errors import ApiError
 from openbricks_server.daemon.hubs.actor import HubActor
 from openbricks_server.daemon.hubs.errors import HubOperationError
@@ -26,6 +27,9 @@ router = APIRouter(prefix="/hubs", tags=["hubs"], dependencies=[Depends(require_
 
 HubRef = Path(description="the hub's id (e.g. virtual:SimHub-1) or its current name", max_length=200)
 SOURCE_MAX_CHARS = 300_000
+# Operators only, and refused while competition mode locks uploads and new runs.
+RUN_ALLOWED = Depends(unlocked("start a run"))
+UPLOAD_ALLOWED = Depends(unlocked("upload a program"))
 
 
 class Holder(BaseModel):
@@ -245,7 +249,10 @@ async def identify(
 
 @router.post("/{hub}/run", response_model=RunStarted)
 async def run(
-    body: ProgramRequest, request: Request, hub: str = HubRef, caller: Caller = Depends(require_operator)
+    body: ProgramRequest,
+    request: Request,
+    hub: str = HubRef,
+    caller: Caller = RUN_ALLOWED,
 ) -> RunStarted:
     """Check, compile, stage and run a program; answers once the hub started it."""
     actor = _actor(request, hub)
@@ -257,7 +264,10 @@ async def run(
 
 @router.post("/{hub}/upload", response_model=Uploaded)
 async def upload(
-    body: UploadRequest, request: Request, hub: str = HubRef, caller: Caller = Depends(require_operator)
+    body: UploadRequest,
+    request: Request,
+    hub: str = HubRef,
+    caller: Caller = UPLOAD_ALLOWED,
 ) -> Uploaded:
     """Stage a program as the hub's button program (or, with `path`, store its text there verbatim)."""
     actor = _actor(request, hub)

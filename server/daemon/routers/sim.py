@@ -12,6 +12,7 @@ from fastapi.responses import FileResponse
 from pydantic import BaseModel, Field, field_validator
 
 from openbricks_server.daemon.auth import Caller, require_operator, require_viewer
+from openbricks_server.daemon.competition import unlocked
 from openbricks_server.daemon.errors import ApiError
 from openbricks_server.daemon.programs import check_name
 from openbricks_sim.job import CHASSIS_NAMES, WORLD_NAMES
@@ -23,6 +24,7 @@ _ULID = re.compile(r"^[0-9A-HJKMNP-TV-Z]{26}$")
 JobState = Literal["queued", "running", "done", "failed", "cancelled"]
 Chassis = Literal[CHASSIS_NAMES]  # type: ignore[valid-type]
 MAX_SPEED = 64.0
+START_ALLOWED = Depends(unlocked("start a sim run"))  # operators, unless competition mode locks it
 
 
 class StartPose(BaseModel):
@@ -156,9 +158,7 @@ async def list_worlds() -> list[World]:
 
 
 @router.post("/runs", response_model=SimRun, status_code=201)
-async def start_run(
-    request: Request, body: SimRunRequest, caller: Caller = Depends(require_operator)
-) -> SimRun:
+async def start_run(request: Request, body: SimRunRequest, caller: Caller = START_ALLOWED) -> SimRun:
     """Start a stored program in the simulator: a child process with time and memory limits, its 3D
     view at `view_url`, its output and telemetry on the event stream."""
     if body.world not in WORLDS:

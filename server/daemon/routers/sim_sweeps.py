@@ -9,6 +9,7 @@ from fastapi.responses import Response
 from pydantic import BaseModel, Field
 
 from openbricks_server.daemon.auth import Caller, require_operator, require_viewer
+from openbricks_server.daemon.competition import unlocked
 from openbricks_server.daemon.errors import ApiError
 from openbricks_server.daemon.programs import check_name
 from openbricks_server.daemon.routers.jobs import JobOut, JobRef, WaitQuery, find_job, registry
@@ -20,6 +21,7 @@ from openbricks_sim.sweep import SweepError, parse_seeds
 router = APIRouter(prefix="/sim/sweeps", tags=["sim"], dependencies=[Depends(require_viewer)])
 
 MAX_WORKERS = 16
+START_ALLOWED = Depends(unlocked("start a sweep"))  # operators, unless competition mode locks it
 
 
 class SweepRequest(BaseModel):
@@ -48,9 +50,7 @@ def _sweeps(request: Request):
 
 
 @router.post("", response_model=JobOut, status_code=202)
-async def start_sweep(
-    request: Request, body: SweepRequest, caller: Caller = Depends(require_operator)
-) -> JobOut:
+async def start_sweep(request: Request, body: SweepRequest, caller: Caller = START_ALLOWED) -> JobOut:
     """Start the sweep and answer at once with its job; `GET /api/sim/sweeps/{job}?wait_s=` waits for
     the rows. Every seed runs as `sim run` runs it: its own child process, with its limits."""
     if body.world not in WORLDS:

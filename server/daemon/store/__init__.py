@@ -1,7 +1,8 @@
 """The console's database: one SQLite file (WAL) under the data dir, one module per kind of record.
 
 `Store(path)` opens (and migrates) it; its attributes are the tables' APIs: `hubs`, `programs`, `runs`,
-`events`, `tokens`, `audit`, `sim_runs`, `jobs`. Safe to call from the event loop and from worker threads.
+`events`, `tokens`, `audit`, `sim_runs`, `jobs`, `settings`. Safe to call from the event loop and from
+worker threads.
 """
 
 from __future__ import annotations
@@ -15,6 +16,7 @@ from openbricks_server.daemon.store.hubs import Hubs
 from openbricks_server.daemon.store.jobs import Jobs
 from openbricks_server.daemon.store.programs import Programs, sha256_text
 from openbricks_server.daemon.store.runs import RunQuery, Runs
+from openbricks_server.daemon.store.settings import Settings
 from openbricks_server.daemon.store.sim_runs import SimRuns
 from openbricks_server.daemon.store.tokens import LabelTaken, Tokens
 
@@ -32,6 +34,7 @@ class Store:
         self.audit = Audit(self.db)
         self.sim_runs = SimRuns(self.db)
         self.jobs = Jobs(self.db)
+        self.settings = Settings(self.db)
 
     @property
     def path(self) -> Path:

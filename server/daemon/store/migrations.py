@@ -168,4 +168,13 @@ MIGRATIONS: list[str] = [
     CREATE INDEX jobs_by_kind ON jobs (kind, created_ms);
     CREATE INDEX jobs_by_batch ON jobs (batch) WHERE batch IS NOT NULL;
     """,
+    # 4: settings the console keeps across restarts (competition mode), one JSON value per key.
+    """
+    CREATE TABLE settings (
+        key TEXT PRIMARY KEY,
+        value TEXT NOT NULL,
+        who TEXT,
+        updated_ms INTEGER NOT NULL
+    );
+    """,
 ]

@@ -4,7 +4,7 @@
  * mode forbids it, so no control can mutate by a path the disabled-state logic does not know about.
  */
 
-import { api, type Hub } from "./api";
+import { api, type Competition, type Hub } from "./api";
 import { consoleModel as model } from "./console.svelte";
 
 const enc = encodeURIComponent;
@@ -98,6 +98,29 @@ export async function runStaged(hubIds: string[]): Promise<void> {
     const what = rerunnable(hub, model.programNames);
     if ("reason" in what) model.notify("warn", `${hub.name}: ${what.reason}`);
     else void runOn([id], what);
+  }
+}
+
+/**
+ * Competition mode is the daemon's: it refuses uploads and new runs while a hub runs, for every page
+ * and script alike. The page shows what the daemon answered, so a refused change leaves the switch as
+ * it was.
+ */
+export async function changeCompetition(change: { on?: boolean; match_s?: number }): Promise<void> {
+  if (refusedFor("mutate")) return;
+  try {
+    model.setCompetition(await api.put<Competition>("/api/competition", change));
+  } catch (err) {
+    model.fail(err, "Competition mode");
+  }
+}
+
+export async function matchTimer(action: "start" | "reset"): Promise<void> {
+  if (refusedFor("mutate")) return;
+  try {
+    model.setCompetition(await api.post<Competition>(`/api/competition/match/${action}`));
+  } catch (err) {
+    model.fail(err, action === "start" ? "Start match" : "Reset match");
   }
 }
 

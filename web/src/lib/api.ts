@@ -65,6 +65,18 @@ export interface TelemetrySample {
   recv_ms: number;
 }
 
+/** Competition mode as the daemon keeps it (`GET /api/competition`, and `competition` events). */
+export interface Competition {
+  on: boolean;
+  match_s: number;
+  /** when the match timer started, on the daemon's clock; null: not running */
+  match_started_ms: number | null;
+  changed_by: string | null;
+  changed_ms: number | null;
+  /** the daemon's clock when it answered (GET only; an event's `ts` says the same) */
+  server_ms?: number;
+}
+
 export interface Me {
   label: string;
   role: Role;

@@ -5,7 +5,7 @@
  */
 
 import { SvelteSet } from "svelte/reactivity";
-import { ApiError, api, type Hub, type Me, type OutputLine, type RunOutcome, type TelemetrySample, query } from "./api";
+import { ApiError, api, type Competition, type Hub, type Me, type OutputLine, type RunOutcome, type TelemetrySample, query } from "./api";
 import type { Envelope, Refetch, StreamState } from "./events";
 import { HubOutput } from "./output";
 import { RunTelemetry } from "./telemetry";
@@ -57,6 +57,7 @@ export class ConsoleModel {
   ble = $state<string | null>(null);
   /** Bumped whenever a refetch reloaded the state, so pages showing stored data reload too. */
   generation = $state(0);
+  /** Competition mode, as the daemon keeps it; `matchStartedMs` is on this computer's clock. */
   competition = $state({ on: false, matchSeconds: 150, matchStartedMs: null as number | null });
   now = $state(Date.now());
   /** The daemon's API paths (from its OpenAPI schema): pages whose API is missing say so. */
@@ -157,6 +158,12 @@ export class ConsoleModel {
     } catch (err) {
       this.fail(err, "Loading programs and recent runs");
     }
+    try {
+      this.setCompetition(await api.get<Competition>("/api/competition"));
+    } catch (err) {
+      // A daemon older than competition mode (404) has none to lock with: the page's switch stays off.
+      if (!(err instanceof ApiError && err.status === 404)) this.fail(err, "Loading competition mode");
+    }
     if (this.apiPaths === null) {
       try {
         const schema = await api.get<{ paths: Record<string, unknown> }>("/openapi.json");
@@ -249,6 +256,9 @@ export class ConsoleModel {
         }
         break;
       }
+      case "competition":
+        this.setCompetition(d as unknown as Competition, e.ts);
+        break;
       case "job":
       case "job_progress":
       case "job_changed": {
@@ -270,9 +280,17 @@ export class ConsoleModel {
     }
   }
 
-  /** Start the match timer of competition mode. */
-  startMatch(): void {
-    this.competition.matchStartedMs = Date.now();
+  /**
+   * Take competition mode from the daemon. Its match start is on the daemon's clock, `serverMs` the
+   * daemon's clock now (an answer's `server_ms`, an event's `ts`): the timer runs on this computer's
+   * clock from the same instant, so a page on another computer shows the same time left.
+   */
+  setCompetition(c: Competition, serverMs = c.server_ms ?? Date.now()): void {
+    this.competition = {
+      on: c.on,
+      matchSeconds: c.match_s,
+      matchStartedMs: c.match_started_ms === null ? null : c.match_started_ms + (Date.now() - serverMs),
+    };
   }
 }
 
