@@ -285,8 +285,10 @@ async def _uploads(count: int, source: str) -> list[float]:
     os.environ["OPENBRICKS_DATA_DIR"] = str(root)
     radio = FakeRadio()
     names = [f"BleBot{i}" for i in range(1, count + 1)]
+    # Outside the data directory's virtual-hubs/, or the manager would also find each hub there and
+    # list it a second time, as a local virtual hub on its pty.
     processes = await asyncio.gather(
-        *(start_virtual_hub(name, hub_dir=str(root / "virtual-hubs" / name)) for name in names)
+        *(start_virtual_hub(name, hub_dir=str(root / "on-the-radio" / name)) for name in names)
     )
     for name, hub in zip(names, processes, strict=True):
         radio.add_hub(PtyHubBridge(name, hub.pty), timing=LinkTiming(mtu=247, interval_ms=7.5))
@@ -302,9 +304,8 @@ async def _uploads(count: int, source: str) -> list[float]:
         program = compile_program(Program("mission.py", source))
         await manager.start()
         async with asyncio.timeout(30):
-            while len(manager.list()) < count:
+            while len(actors := [a for a in manager.list() if a.state.kind == "ble"]) < count:
                 await asyncio.sleep(0.1)
-        actors = manager.list()
         await asyncio.gather(*(actor.connect(60) for actor in actors))
 
         async def timed(actor) -> float:

@@ -113,6 +113,7 @@ class VirtualHub:
         )
         self.run_active = False
         self.runs_started = 0
+        self._code_ended_at = None  # wall time the hub last went back to its prompt
         self._on_ready = None
         self._link_started = False
         self.control_path = None  # set by whoever serves the control socket
@@ -235,6 +236,8 @@ class VirtualHub:
 
     def _run(self, code):
         """Run compiled hub code behind the interrupt gate; returns the exception it ended with."""
+        if self._code_ended_at is not None:
+            self.world.wall_time_passed(time.monotonic() - self._code_ended_at)
         outcome = None
         cost = PythonCost(self.world.clock)  # spinning code lets time pass, as on a hub
         try:
@@ -249,6 +252,7 @@ class VirtualHub:
                 cost.uninstall()  # again: an interrupt that landed in the with's exit skipped it
         except BaseException as late:  # an interrupt that landed as the code ended
             outcome = outcome or late
+        self._code_ended_at = time.monotonic()
         if isinstance(outcome, HubShutdown) or self._closing.is_set():
             raise HubShutdown
         return outcome

@@ -135,6 +135,14 @@ class HubWorld:
     def cancel_timers(self):
         self._timers.cancel_all()
 
+    def wall_time_passed(self, seconds):
+        """The hub sat at its prompt for `seconds` of wall time, running no code. Simulated time only
+        passes while code runs, but the RTC is the hub's wall clock and keeps going, as a hub's
+        does: without this every prompt wait would set it back against the host's clock, and the
+        times stamped on run logs and printed by programs would drift from the host's."""
+        if seconds > 0:
+            self.clock.set_epoch_ms(self.clock.epoch_us() // 1000 + int(seconds * 1000))
+
     def reset_to_start(self):
         """Put the robot (and every prop) back where the world starts, at rest; time goes on."""
         data = self._data

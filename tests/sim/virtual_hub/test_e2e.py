@@ -342,6 +342,18 @@ def test_an_idle_hub_keeps_to_real_time_after_hosts_interrupt_it(host):
         assert 700 < elapsed_ms < 2500, f"1 s of wall time at the launcher took {elapsed_ms} ms of hub time"
 
 
+def test_the_rtc_keeps_the_hosts_time_while_the_hub_waits_at_its_prompt(host):
+    """Simulated time stands still at the prompt, but the RTC is the hub's wall clock: set from the
+    host's, it must still read the host's time after the hub has waited, or every run log stamped
+    after a pause would be set back by it."""
+    host_ms = int(time.time() * 1000)
+    host.call(f"h.set_rtc({host_ms})")
+    time.sleep(1.5)
+    out, err = host.exec_raw("from openbricks import log\nprint(log.epoch_ms())")
+    assert not err, err
+    assert abs(int(out) - int(time.time() * 1000)) < 300
+
+
 def test_run_logs_and_the_hub_name_survive_a_restart_of_the_hub(tmp_path):
     first = HubProcess(tmp_path / "RobotB", "RobotB", "--speed", "max")
     try:
