@@ -85,6 +85,18 @@ def hub_holding(info, port: str) -> str | None:
     return next((p["hub_name"] for p in ports if p["port"] == port and p["hub_id"]), None)
 
 
+def refuse_held_port(port: str, instead: str) -> None:
+    """Refuse a serial port whose hub a running console holds: two programs writing one port garble
+    both. `instead` says how to do the same through the console ("{hub}" is the hub's name)."""
+    info = running()
+    held = hub_holding(info, port) if info is not None else None
+    if held is not None:
+        raise CliError(
+            f"the console ({info.url}) holds hub {held} on {port}: {instead.format(hub=held)}, "
+            "or stop the console first"
+        )
+
+
 def hub_path(name: str) -> str:
     return "/hubs/" + quote(name, safe="")
 

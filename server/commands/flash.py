@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import asyncio
 
+from openbricks_server import console_client
 from openbricks_server.console import ProgressBar, Steps, confirm
 from openbricks_server.errors import EXIT_OK, CliError
 from openbricks_server.flash.flasher import (
@@ -19,19 +20,6 @@ from openbricks_server.flash.flasher import (
 )
 from openbricks_server.flash.image import inspect_image
 from openbricks_server.flash.ports import find_esp_port, missing_port
-
-
-def _check_console(port: str) -> None:
-    """Refuse a port whose hub a running console holds: two programs writing one port garble both."""
-    from openbricks_server import console_client
-
-    info = console_client.running()
-    held = console_client.hub_holding(info, port) if info is not None else None
-    if held is not None:
-        raise CliError(
-            f"the console ({info.url}) holds hub {held} on {port}: flash it from the console (its Flash "
-            "page, or POST /api/flash), or stop the console first"
-        )
 
 
 class _TerminalReport:
@@ -63,7 +51,7 @@ def main(args) -> int:
     if problem:
         raise CliError(f"--port {args.port}: {problem}")
     port = args.port or find_esp_port()
-    _check_console(port)
+    console_client.refuse_held_port(port, "flash it from the console (its Flash page, or POST /api/flash)")
     steps.step(f"port {port}" + ("" if args.port else " (the only ESP device connected)"))
     request = FlashRequest(
         port=port,

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import sys
 
+from openbricks_server import console_client
 from openbricks_server.errors import EXIT_OK
 from openbricks_server.servo_id import check_id, reid_report, scan_report
 
@@ -26,6 +27,9 @@ def _over_usb(args) -> int:
     from openbricks_server.servo_id import reid_usb, scan_usb, usb_where
 
     port = args.port or pick_port(connected_ports(), None, "USB serial adapter", "-p/--port")
+    console_client.refuse_held_port(
+        port, "scan or re-ID {hub}'s servos from the console (its Servo-ID page, or POST /api/servos/scan)"
+    )
     if args.scan:
         _print_scan(scan_usb(port, args.baudrate, args.timeout), usb_where(port))
     else:

@@ -4,6 +4,7 @@ Every hub and every CLI call has a timeout, and hubs are terminated (killed if t
 test module ends, so a hung hub fails a test instead of stalling the suite.
 """
 
+import contextlib
 import json
 import os
 import signal
@@ -159,6 +160,33 @@ def interrupt_when(
         got += line
     process.send_signal(signal_number)
     return got
+
+
+@contextlib.contextmanager
+def console_holding(env: dict, port: str, root: Path, timeout_s: float = 60):
+    """`openbricks console` holding the hub on serial `port` (and no other hub); yields its URL."""
+    env = dict(env, OPENBRICKS_RUNTIME_DIR=str(root / "run"))
+    command = ["console", "--port", "0", "--virtual", "0", "--no-ble", "--data-dir", str(root / "console")]
+    console = subprocess.Popen(
+        [sys.executable, "-m", "openbricks_server.cli", *command, "--serial", port],
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+        env=env,
+    )
+    try:
+        runtime = root / "run" / "console.json"
+        deadline = time.monotonic() + timeout_s
+        while not runtime.exists():
+            assert console.poll() is None and time.monotonic() < deadline, "the console did not start"
+            time.sleep(0.1)
+        yield json.loads(runtime.read_text())["url"], env
+    finally:
+        console.send_signal(signal.SIGINT)
+        try:
+            console.wait(30)
+        except subprocess.TimeoutExpired:
+            console.kill()
+            console.wait()
 
 
 @pytest.fixture(scope="module")

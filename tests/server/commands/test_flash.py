@@ -9,7 +9,7 @@ import pytest
 from openbricks_server.flash import signing
 
 from ..flash.images import build_image
-from .conftest import HubProcess, cli
+from .conftest import HubProcess, cli, console_holding
 
 pytestmark = pytest.mark.e2e
 
@@ -139,36 +139,8 @@ def test_without_firmware_the_newest_release_for_the_chip_is_downloaded_and_cach
 
 
 def test_a_port_the_console_holds_is_refused_with_where_to_flash_it(tmp_path, board, keys, fake_esptool):
-    import json
-    import signal
-    import subprocess
-    import sys
-    import time
-
-    env = dict(flash_env(board, fake_esptool, keys[1]), OPENBRICKS_RUNTIME_DIR=str(tmp_path / "run"))
-    command = [
-        "console",
-        "--port",
-        "0",
-        "--virtual",
-        "0",
-        "--no-ble",
-        "--data-dir",
-        str(tmp_path / "console"),
-    ]
-    console = subprocess.Popen(
-        [sys.executable, "-m", "openbricks_server.cli", *command, "--serial", board.pty],
-        stdout=subprocess.DEVNULL,
-        stderr=subprocess.DEVNULL,
-        env=env,
-    )
-    try:
-        runtime = tmp_path / "run" / "console.json"
-        deadline = time.monotonic() + 60
-        while not runtime.exists():
-            assert console.poll() is None and time.monotonic() < deadline, "the console did not start"
-            time.sleep(0.1)
-        url = json.loads(runtime.read_text())["url"]
+    env = flash_env(board, fake_esptool, keys[1])
+    with console_holding(env, board.pty, tmp_path) as (url, env):
         firmware = image(tmp_path, "esp32s3", "2.8.0")
         done = cli(env, "flash", "--name", "RobotA", "--port", board.pty, "--firmware", str(firmware))
         assert done.returncode == 1
@@ -177,6 +149,3 @@ def test_a_port_the_console_holds_is_refused_with_where_to_flash_it(tmp_path, bo
             and "flash it from the console" in done.stderr
         )
         assert fake_esptool.calls() == []
-    finally:
-        console.send_signal(signal.SIGINT)
-        console.wait(30)

@@ -2,7 +2,7 @@
 
 import pytest
 
-from .conftest import cli
+from .conftest import HubProcess, cli, console_holding
 
 pytestmark = pytest.mark.e2e
 
@@ -25,3 +25,17 @@ def test_bad_ids_are_refused_before_connecting(env):
     done = cli(env, "servo-id", "-n", "RobotA", "300")
     assert done.returncode == 2 and "servo bus ids are 0..253" in done.stderr
     assert cli(env, "servo-id", "-n", "RobotA").returncode == 2  # neither NEW_ID nor --scan
+
+
+def test_a_port_the_console_holds_is_refused_with_how_to_reach_its_servos(tmp_path):
+    """-p names a servo bus adapter; a port the console holds is a hub's link, and writing servo
+    packets into it would garble the console's session with the hub."""
+    hub = HubProcess("HeldHub", tmp_path / "data")
+    try:
+        with console_holding(hub.env, hub.pty, tmp_path) as (url, env):
+            done = cli(env, "servo-id", "-p", hub.pty, "--scan")
+        assert done.returncode == 1
+        assert f"the console ({url}) holds hub pts-" in done.stderr
+        assert "from the console (its Servo-ID page" in done.stderr and "Traceback" not in done.stderr
+    finally:
+        hub.stop()
