@@ -140,6 +140,25 @@ for i in range(10):
 results["imu_heading"] = yaw.heading()
 expect_error(ValueError, "seed_bias", yaw.seed_bias, 100.0)
 
+# PCNT encoder core, fed what a PCNT unit (wrapping at +-32767) reads while an MG370 turns 5 turns back.
+encoder = native.PCNTEncoder(68028, invert=True)
+raw = 0
+encoder.sample(raw)
+for _ in range(5 * 68028 // 10000):
+    raw -= 10000
+    if raw <= -32767:
+        raw += 32767
+    encoder.sample(raw)
+results["encoder"] = [encoder.count(), encoder.angle(), encoder.direction(), encoder.max_step()]
+encoder.reset(-5)
+results["encoder_reset"] = encoder.count()
+assert native.PCNTEncoder.HARDWARE is False
+expect_error(ValueError, "counts_per_rev must be > 0", native.PCNTEncoder, 0)
+expect_error(TypeError, "raw must be an int", encoder.sample, 1.5)
+expect_error(OSError, "no PCNT peripheral", native.PCNTEncoder, 1320, pin_a=7, pin_b=8)
+encoder.close()
+expect_error(ValueError, "was closed", encoder.count)
+
 # Serial-bus codec.
 scs = native.scs
 assert scs.ping(1) == bytes([0xFF, 0xFF, 0x01, 0x02, 0x01, 0xFB])

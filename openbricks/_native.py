@@ -14,6 +14,7 @@ NAMES = (
     "Observer",
     "DriveBase",
     "ImuYaw",
+    "PCNTEncoder",
     "scs",
     "serial_bus",
     "MotorIO",

@@ -11,6 +11,9 @@
  * and the unix port: each period it tries the motor lock and, when every
  * subscriber is native, ticks the controllers and the serial-bus engine
  * right there, so a busy interpreter never starves them.
+ * Before that work it polls the sensors registered with it (a PCNT
+ * encoder's counter, the ICM-45686's SPI burst), so a counter is unwrapped
+ * and the gyro heading integrated every millisecond whoever reads them.
  * Nothing here may allocate, block or call the interpreter.
  */
 #ifndef OB_HARD_TICK_H
@@ -35,6 +38,12 @@
  */
 typedef bool (*ob_hard_tick_work_fn_t)(void *ctx);
 
+/* A sensor read each period, under the motor lock, before the work (never allocates or blocks). */
+typedef void (*ob_hard_tick_poll_fn_t)(void *ctx);
+
+/* Sensors one hard tick polls at most: the ESP32's 8 PCNT units and a few IMUs. */
+#define OB_HARD_TICK_MAX_POLLS 12u
+
 typedef struct {
     volatile uint32_t count;      /* periods delivered since the hard tick started */
     volatile uint32_t dispatched; /* periods that ran the control tick in the timer's context */
@@ -42,12 +51,25 @@ typedef struct {
     bool running;
     ob_hard_tick_work_fn_t work; /* NULL: the tick only counts */
     void *work_ctx;
+    ob_hard_tick_poll_fn_t poll_fn[OB_HARD_TICK_MAX_POLLS];
+    void *poll_ctx[OB_HARD_TICK_MAX_POLLS];
+    volatile uint32_t n_polls;
 } ob_hard_tick_t;
 
 void ob_hard_tick_init(ob_hard_tick_t *tick);
 
 /* One period elapsed: called by the platform timer, in its context; counts, then runs the work under the lock. */
 void ob_hard_tick_fire(ob_hard_tick_t *tick);
+
+/*
+ * Poll fn(ctx) every period from now on; false when OB_HARD_TICK_MAX_POLLS
+ * sensors are polled already. Called holding the motor lock (or before the
+ * timer starts), like every change to what the tick runs.
+ */
+bool ob_hard_tick_add_poll(ob_hard_tick_t *tick, ob_hard_tick_poll_fn_t fn, void *ctx);
+
+/* Stop polling ctx (nothing when it is not polled); holding the motor lock. */
+void ob_hard_tick_remove_poll(ob_hard_tick_t *tick, void *ctx);
 
 /* Ticks a 1 kHz tick should deliver in elapsed_us. */
 uint32_t ob_hard_tick_expected(uint32_t elapsed_us);

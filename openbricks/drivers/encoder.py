@@ -8,17 +8,20 @@ peripheral when the runtime has it and the interrupt decoder otherwise:
   Pin.irq tops out around 5-10 kHz of edges: the ESP32 port has no hard pin
   interrupts, it queues every handler on the MicroPython scheduler, so a
   burst the queue cannot hold skips states (counted in `missed`).
-- PCNTEncoder lets the ESP32's pulse-counter peripheral count (machine.Encoder),
-  with its glitch filter, for high-resolution GMR encoders (MG370) whose edge
-  rate no interrupt handler could keep up with. One PCNT unit per encoder
-  (ESP32 has 8, ESP32-S3 has 4). The default wherever machine.Encoder exists:
-  it costs no CPU per edge and misses none, and the simulator counts encoders
-  this way too (it has no per-edge pin interrupts).
+- PCNTEncoder lets the ESP32's pulse-counter peripheral count, with its glitch
+  filter, for high-resolution GMR encoders (MG370) whose edge rate no
+  interrupt handler could keep up with. One PCNT unit per encoder (ESP32 has
+  8, ESP32-S3 has 4). On the firmware the counter is the native PCNTEncoder
+  (`_openbricks_native`, the encoder core in C): the hard tick reads the unit
+  every millisecond and unwraps its 16-bit counter, whatever Python is doing.
+  Elsewhere it is machine.Encoder (the simulator's). The default wherever
+  either exists: it costs no CPU per edge and misses none, and the simulator
+  counts encoders this way too (it has no per-edge pin interrupts).
 
 Both count up for A leading B, so a motor keeps its direction whichever counts.
 """
 
-from openbricks import pins
+from openbricks import _native, pins
 from openbricks.drivers import claim_pins, release_pins
 
 # Count change for (previous AB state << 2 | new AB state), AB = (A << 1) | B. Forward is
@@ -32,21 +35,36 @@ _NS_PER_APB_CYCLE = 12.5
 _PCNT_UNITS = {pins.ESP32: 8, pins.ESP32S3: 4}
 
 
-def make_encoder(pin_a, pin_b, invert=False, name="encoder", unit=None, filter=1023):
+def make_encoder(pin_a, pin_b, invert=False, name="encoder", unit=None, filter=1023, counts_per_rev=4):
     """The encoder counter this runtime does best: a PCNT unit, else the pin-interrupt decoder.
 
     `unit` is the PCNT unit to count on; None takes the lowest free one, and when every unit of the
     chip is taken the encoder counts in a pin interrupt instead. A runtime without machine.Encoder
-    (a MicroPython port other than the ESP32's) always counts in a pin interrupt.
+    (a MicroPython port other than the ESP32's) always counts in a pin interrupt. `counts_per_rev`
+    (edges per output turn) lets the native counter report degrees too.
     """
     import machine
 
-    if getattr(machine, "Encoder", None) is not None:
+    if _hub_counter() is not None or getattr(machine, "Encoder", None) is not None:
         if unit is None:
             unit = free_pcnt_unit()
         if unit is not None:
-            return PCNTEncoder(pin_a, pin_b, unit=unit, filter=filter, invert=invert, name=name)
+            return PCNTEncoder(
+                pin_a,
+                pin_b,
+                unit=unit,
+                filter=filter,
+                invert=invert,
+                name=name,
+                counts_per_rev=counts_per_rev,
+            )
     return QuadratureEncoder(pin_a, pin_b, invert=invert, name=name)
+
+
+def _hub_counter():
+    """The firmware's native PCNTEncoder when this build counts pins with it (the ESP32 image), else None."""
+    counter = _native.get("PCNTEncoder")
+    return counter if counter is not None and counter.HARDWARE else None
 
 
 def free_pcnt_unit():
@@ -105,11 +123,11 @@ class QuadratureEncoder:
 
 
 class PCNTEncoder:
-    """x4 counting of an A/B encoder by a PCNT unit (machine.Encoder)."""
+    """x4 counting of an A/B encoder by a PCNT unit: the firmware's native counter, else machine.Encoder."""
 
     _units = {}  # unit -> the encoder counting on it
 
-    def __init__(self, pin_a, pin_b, unit=0, filter=1023, invert=False, name="encoder"):
+    def __init__(self, pin_a, pin_b, unit=0, filter=1023, invert=False, name="encoder", counts_per_rev=4):
         from machine import Pin
 
         holder = PCNTEncoder._units.get(unit)
@@ -124,21 +142,37 @@ class PCNTEncoder:
             raise ValueError("pcnt_filter=%r: the PCNT glitch filter takes 0..1023 APB cycles" % (filter,))
         self._pins = (pin_a, pin_b)
         claim_pins(self, ((pin_a, name + " A", False), (pin_b, name + " B", False)))
+        self._sign = -1 if invert else 1
         try:
-            from machine import Encoder
+            native = _hub_counter()
+            if native is not None:
+                # The core applies the direction itself, and the hard tick keeps it counting.
+                # The core counts whole edges per turn; a calibrated fractional figure only moves its
+                # angle(), which the motors do not use (they scale count() themselves).
+                self._native = native(
+                    max(1, int(counts_per_rev + 0.5)),
+                    invert=invert,
+                    pin_a=pin_a,
+                    pin_b=pin_b,
+                    unit=unit,
+                    filter=filter,
+                )
+                self._sign = 1
+            else:
+                from machine import Encoder
 
-            self._encoder = Encoder(
-                unit,
-                Pin(pin_a, Pin.IN),
-                Pin(pin_b, Pin.IN),
-                phases=4,
-                filter_ns=int(filter * _NS_PER_APB_CYCLE),
-            )
+                self._native = None
+                self._encoder = Encoder(
+                    unit,
+                    Pin(pin_a, Pin.IN),
+                    Pin(pin_b, Pin.IN),
+                    phases=4,
+                    filter_ns=int(filter * _NS_PER_APB_CYCLE),
+                )
         except Exception:
             release_pins(self, self._pins)
             raise
         self.unit = unit
-        self._sign = -1 if invert else 1
         PCNTEncoder._units[unit] = self
 
     def _live(self):
@@ -146,13 +180,21 @@ class PCNTEncoder:
         return owner is not None and owner[1] is self
 
     def count(self):
+        if self._native is not None:
+            return self._native.count()
         return self._encoder.value() * self._sign
 
     def reset(self, count=0):
-        self._encoder.value(count * self._sign)
+        if self._native is not None:
+            self._native.reset(count)
+        else:
+            self._encoder.value(count * self._sign)
 
     def close(self):
-        self._encoder.deinit()
+        if self._native is not None:
+            self._native.close()
+        else:
+            self._encoder.deinit()
         release_pins(self, self._pins)
         if PCNTEncoder._units.get(self.unit) is self:
             del PCNTEncoder._units[self.unit]

@@ -83,7 +83,12 @@ class JGB37Motor(Motor):
 
     def _make_encoder(self, pin_a, pin_b, invert):
         return make_encoder(
-            pin_a, pin_b, invert=invert, name="%s encoder" % type(self).__name__, unit=self.pcnt_unit
+            pin_a,
+            pin_b,
+            invert=invert,
+            name="%s encoder" % type(self).__name__,
+            unit=self.pcnt_unit,
+            counts_per_rev=self.counts_per_output_rev,
         )
 
     def _make_servo(self, kp):

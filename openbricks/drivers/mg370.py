@@ -54,5 +54,11 @@ class MG370Motor(JGB37Motor):
 
     def _make_encoder(self, pin_a, pin_b, invert):
         return make_encoder(
-            pin_a, pin_b, invert=invert, name="MG370 encoder", unit=self.pcnt_unit, filter=self.pcnt_filter
+            pin_a,
+            pin_b,
+            invert=invert,
+            name="MG370 encoder",
+            unit=self.pcnt_unit,
+            filter=self.pcnt_filter,
+            counts_per_rev=self.counts_per_output_rev,
         )

@@ -24,7 +24,16 @@ HUB_ONLY = {"interrupt_main", "ticks_itself"}
 # The host's parsed frames are struct sequences with their own types; the hub's are attribute tuples
 # with the same fields.
 SCS_HOST_ONLY = {"Frame", "Status"}
-TYPES = ("TrapezoidalProfile", "Observer", "MotorProcess", "Servo", "DriveBase", "ImuYaw", "SerialBus")
+TYPES = (
+    "TrapezoidalProfile",
+    "Observer",
+    "MotorProcess",
+    "Servo",
+    "DriveBase",
+    "ImuYaw",
+    "SerialBus",
+    "PCNTEncoder",
+)
 TYPE_DEFINITION = re.compile(r"MP_DEFINE_CONST_OBJ_TYPE\(\s*(\w+),\s*MP_QSTR_(\w+),(.*?)\);", re.S)
 
 

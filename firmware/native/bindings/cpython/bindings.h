@@ -16,6 +16,7 @@ int ob_py_add_servo(PyObject *module);
 int ob_py_add_drivebase(PyObject *module);
 int ob_py_add_scs(PyObject *module);
 int ob_py_add_imu_yaw(PyObject *module);
+int ob_py_add_encoder(PyObject *module);
 /* MotorIO and the _C_API capsule; needs the scheduler added first. */
 int ob_py_add_capi(PyObject *module);
 /* SerialBus and serial_bus(); needs the scheduler and MotorIO added first. */

@@ -33,6 +33,18 @@ float ob_mp_positive_float(mp_obj_t obj, const char *where, const char *name) {
     return value;
 }
 
+int32_t ob_mp_int32(mp_obj_t obj, const char *where, const char *name) {
+    if (is_bool(obj) || !mp_obj_is_int(obj)) {
+        mp_raise_msg_varg(&mp_type_TypeError, MP_ERROR_TEXT("%s: %s must be an int, not %s"), where, name,
+                          mp_obj_get_type_str(obj));
+    }
+    mp_int_t value;
+    if (!mp_obj_get_int_maybe(obj, &value) || (mp_int_t)(int32_t)value != value) {
+        mp_raise_msg_varg(&mp_type_ValueError, MP_ERROR_TEXT("%s: %s is out of range (a 32-bit count)"), where, name);
+    }
+    return (int32_t)value;
+}
+
 uint32_t ob_mp_time_ms(mp_obj_t obj, const char *where) {
     if (is_bool(obj) || !mp_obj_is_int(obj)) {
         /* Floats are refused, not truncated: a fractional millisecond is a caller's bug. */

@@ -37,6 +37,9 @@ float ob_mp_float(mp_obj_t obj, const char *where, const char *name);
 /* As ob_mp_float, and > 0. */
 float ob_mp_positive_float(mp_obj_t obj, const char *where, const char *name);
 
+/* An int (bool refused) that fits 32 bits. */
+int32_t ob_mp_int32(mp_obj_t obj, const char *where, const char *name);
+
 /* A scheduler time: a non-negative int, taken modulo 2^32 like the hub's tick clock. */
 uint32_t ob_mp_time_ms(mp_obj_t obj, const char *where);
 
@@ -108,6 +111,17 @@ const ob_uart_t *ob_mp_native_uart_get(mp_obj_t obj);
 /* Start the 1 kHz hard tick (idempotent); raises OSError when the platform timer cannot start. */
 void ob_mp_hard_tick_start(void);
 
+/*
+ * Have the hard tick call fn(ctx) every period, before motor_process (hard_tick.h), and keep
+ * `owner` (the object ctx lives in) alive meanwhile; starts the hard tick. Raises OSError when it
+ * polls as many sensors as it can already.
+ */
+#include "hard_tick.h"
+void ob_mp_hard_tick_poll(mp_obj_t owner, ob_hard_tick_poll_fn_t fn, void *ctx);
+
+/* Stop polling ctx and let go of its owner (nothing when it is not polled). */
+void ob_mp_hard_tick_unpoll(void *ctx);
+
 /* Run by the hard tick each period under the motor lock (mp_scheduler.c): ticks motor_process when
  * every subscriber is hard-safe; true when it did. */
 bool ob_mp_motor_process_hard_work(void *unused);
@@ -128,6 +142,7 @@ extern const mp_obj_type_t ob_mp_motor_process_type;
 extern const mp_obj_type_t ob_mp_servo_type;
 extern const mp_obj_type_t ob_mp_drivebase_type;
 extern const mp_obj_type_t ob_mp_imu_yaw_type;
+extern const mp_obj_type_t ob_mp_pcnt_encoder_type;
 extern const mp_obj_module_t ob_mp_scs_module;
 extern const mp_obj_type_t ob_mp_serial_bus_type;
 /* serial_bus(uart_id, tx=None, rx=None, baud=1000000, dir_pin=None) -> SerialBus (mp_serial_bus.c). */
@@ -140,6 +155,19 @@ extern const mp_obj_fun_builtin_var_t ob_mp_hard_tick_selftest_obj;
 #include "uart.h"
 /* The hub's UART uart_id on the ESP-IDF driver, as the engine's wire (mp_uart_esp32.c); raises on failure. */
 const ob_uart_t *ob_mp_uart_esp32_open(int uart_id, mp_obj_t tx, mp_obj_t rx, uint32_t baud, mp_obj_t dir_pin);
+#endif
+
+#if defined(ESP_PLATFORM)
+#include "pcnt.h"
+/*
+ * A PCNT unit counting both edges of pin_a and pin_b (x4 quadrature) between -OB_PCNT_LIMIT and
+ * +OB_PCNT_LIMIT behind a glitch filter of filter_cycles APB cycles (mp_pcnt_esp32.c); fills *pcnt.
+ * Raises OSError when the unit cannot be set up.
+ */
+void ob_mp_pcnt_esp32_open(int pin_a, int pin_b, int filter_cycles, ob_pcnt_t *pcnt);
+
+/* Stop the unit *pcnt counts on and give it back to the driver. */
+void ob_mp_pcnt_esp32_close(const ob_pcnt_t *pcnt);
 #endif
 
 /* The module's motor_process (created on first use; see mp_scheduler.c). */

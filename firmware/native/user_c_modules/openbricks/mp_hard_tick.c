@@ -16,6 +16,12 @@
 
 static ob_hard_tick_t hard_tick;
 
+/* The objects whose sensors the hard tick polls, kept reachable for the GC while it does. */
+#define POLLED_MAX 12
+MP_REGISTER_ROOT_POINTER(mp_obj_t ob_hard_tick_polled[12]);
+MP_STATIC_ASSERT(POLLED_MAX == OB_HARD_TICK_MAX_POLLS);
+static void *polled_ctx[POLLED_MAX];
+
 static void fire(void *ctx) {
     ob_hard_tick_fire(ctx);
 }
@@ -30,6 +36,40 @@ void ob_mp_hard_tick_start(void) {
         mp_raise_msg(&mp_type_OSError, MP_ERROR_TEXT("motor_process: the 1 kHz hard timer could not be started"));
     }
     hard_tick.running = true;
+}
+
+void ob_mp_hard_tick_poll(mp_obj_t owner, ob_hard_tick_poll_fn_t fn, void *ctx) {
+    int slot = -1;
+    for (int i = 0; i < POLLED_MAX; i++) {
+        if (MP_STATE_VM(ob_hard_tick_polled)[i] == MP_OBJ_NULL) {
+            slot = i;
+            break;
+        }
+    }
+    ob_hard_timer_lock();
+    bool added = slot >= 0 && ob_hard_tick_add_poll(&hard_tick, fn, ctx);
+    ob_hard_timer_unlock();
+    if (!added) {
+        mp_raise_msg_varg(&mp_type_OSError,
+                          MP_ERROR_TEXT("the hard tick reads %d sensors already (PCNT encoders and IMUs); "
+                                        "close() one you no longer use"),
+                          POLLED_MAX);
+    }
+    MP_STATE_VM(ob_hard_tick_polled)[slot] = owner;
+    polled_ctx[slot] = ctx;
+    ob_mp_hard_tick_start();
+}
+
+void ob_mp_hard_tick_unpoll(void *ctx) {
+    ob_hard_timer_lock();
+    ob_hard_tick_remove_poll(&hard_tick, ctx);
+    ob_hard_timer_unlock();
+    for (int i = 0; i < POLLED_MAX; i++) {
+        if (polled_ctx[i] == ctx) {
+            polled_ctx[i] = NULL;
+            MP_STATE_VM(ob_hard_tick_polled)[i] = MP_OBJ_NULL;
+        }
+    }
 }
 
 static mp_obj_t hard_tick_count(mp_obj_t self_in) {
