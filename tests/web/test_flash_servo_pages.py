@@ -1,7 +1,8 @@
 """The Flash and Servo-ID pages in Debian's Chromium against a real `openbricks console`: a USB hub (a
 virtual hub's pty given with --serial, the fake esptool standing in for the chip work) and an unplugged
-port flashed at once from the page, progress to 100 % and a result per port; a servo re-ID through a
-virtual hub, read back; a viewer can change neither."""
+port flashed at once from the page, progress to 100 % and a result per port, both jobs in the History
+page's Jobs (live, and after a reload); a servo re-ID through a virtual hub, read back; a viewer can
+change neither."""
 
 from __future__ import annotations
 
@@ -45,6 +46,10 @@ def test_flash_two_ports_from_the_page_one_succeeds_one_fails_alone(usb_console,
     hub_id = "serial:" + board.pty.removeprefix("/dev/").replace("/", "-")
     image = tmp_path / "firmware.bin"
     image.write_bytes(build_image("esp32s3", version="2.8.0"))
+    # A second page watches the history's jobs from before the flash: they must appear there live.
+    watcher = page_for(usb_console.url)
+    watcher.goto(f"{usb_console.base}/#/history?view=jobs")
+    watcher.locator("[data-testid=jobs] .empty", has_text="No jobs match").wait_for()
     page = page_for(usb_console.url)
     page.goto(f"{usb_console.base}/#/flash")
     page.get_by_role("button", name="Scan ports").click()
@@ -75,6 +80,27 @@ def test_flash_two_ports_from_the_page_one_succeeds_one_fails_alone(usb_console,
     assert board.nvs_blob("openbricks", "hub_name") == b"RobotW"
     screenshot(page, "flash-done")
     assert page.errors == [], page.errors
+
+    # Both jobs are in the history with how each ended: on the watching page as they happened, and read
+    # back from the store on a fresh visit, where one can be opened and the list filtered.
+    for history in (watcher, page):
+        if history is page:
+            page.goto(f"{usb_console.base}/#/history")
+            page.get_by_role("tab", name="Jobs").click()
+        done = history.locator("[data-testid=job-row][data-state=done]", has_text=board.pty)
+        done.wait_for()
+        assert "Flash" in done.inner_text() and "named RobotW" in done.inner_text()
+        failed = history.locator("[data-testid=job-row][data-state=failed]", has_text="/dev/ttyUSB97")
+        failed.wait_for()
+        assert "there is no such port" in failed.inner_text()
+    failed.click()
+    detail = page.locator("[data-testid=job-detail]")
+    detail.locator("[data-testid=job-outcome]", has_text="there is no such port").wait_for()
+    assert "Ghost" in detail.inner_text()  # what was asked: the name it was to get
+    page.select_option("select[aria-label='Job state']", "failed")
+    page.wait_for_function("() => document.querySelectorAll('[data-testid=job-row]').length === 1")
+    screenshot(page, "history-jobs")
+    assert watcher.errors == [] and page.errors == [], (watcher.errors, page.errors)
 
     viewer = page_for(usb_console.sign_in_url(usb_console.mint("viewer"), "flash"))
     viewer.locator("[data-testid=readonly-reason]").wait_for()

@@ -160,8 +160,15 @@ class JobRegistry:
         live = self._live.get(job_id)
         return live.record() if live is not None else self.store.jobs.get(job_id)
 
-    def list(self, kind: str | None = None, batch: str | None = None, limit: int = 100) -> list[dict]:
-        return self.store.jobs.list(kind, batch, limit)
+    def list(
+        self,
+        kind: str | None = None,
+        batch: str | None = None,
+        limit: int = 100,
+        before: str | None = None,
+        state: str | None = None,
+    ) -> list[dict]:
+        return self.store.jobs.list(kind, batch, limit, before, state)
 
     def active(self, kind: str | None = None) -> list[Job]:
         return [job for job in self._live.values() if kind is None or job.kind == kind]

@@ -10,6 +10,7 @@ from pydantic import BaseModel
 
 from openbricks_server.daemon.auth import require_viewer
 from openbricks_server.daemon.errors import ApiError
+from openbricks_server.daemon.jobs.registry import JobState
 
 router = APIRouter(prefix="/jobs", tags=["jobs"], dependencies=[Depends(require_viewer)])
 
@@ -66,10 +67,12 @@ async def list_jobs(
     request: Request,
     kind: str | None = Query(None, max_length=40, description="only jobs of this kind"),
     batch: str | None = Query(None, max_length=40, description="only the jobs one request started"),
+    state: JobState | None = Query(None, description="only jobs in this state"),
+    before: str | None = Query(None, max_length=40, description="a job id: only older jobs (paging)"),
     limit: int = Query(100, ge=1, le=1000),
 ) -> list[JobOut]:
-    """The most recent jobs first."""
-    return [JobOut(**job) for job in registry(request).list(kind, batch, limit)]
+    """The most recent jobs first (the History page's Jobs list)."""
+    return [JobOut(**job) for job in registry(request).list(kind, batch, limit, before, state)]
 
 
 @router.get("/{job}", response_model=JobOut)

@@ -38,10 +38,15 @@ class Jobs:
         return _job(row) if row else None
 
     def list(
-        self, kind: str | None = None, batch: str | None = None, limit: int = 100, before: str | None = None
+        self,
+        kind: str | None = None,
+        batch: str | None = None,
+        limit: int = 100,
+        before: str | None = None,
+        state: str | None = None,
     ) -> list[dict]:
         where, args = [], []
-        for column, value in (("kind", kind), ("batch", batch)):
+        for column, value in (("kind", kind), ("batch", batch), ("state", state)):
             if value is not None:
                 where.append(f"{column} = ?")
                 args.append(value)

@@ -111,3 +111,32 @@ def test_shutdown_cancels_running_jobs_and_a_restart_marks_unfinished_ones(tmp_p
     row = store.jobs.get(left)
     assert row["state"] == "failed" and row["message"] == INTERRUPTED
     store.close()
+
+
+def test_the_history_lists_jobs_by_state_and_pages_back_through_older_ones(tmp_path):
+    async def main():
+        store, jobs, _ = _registry(tmp_path)
+
+        async def fine(job):
+            return {}
+
+        async def broken(job):
+            raise JobFailed("no answer from the bootloader")
+
+        made = []
+        for work in (fine, broken, fine, broken, fine):
+            job = jobs.create("flash", f"/dev/ttyUSB{len(made)}", "local", {})
+            made.append(job.job_id)
+            await jobs.start(job, work)
+            await asyncio.sleep(0.003)  # ids order by their millisecond, random within one
+        newest_first = made[::-1]
+        assert [j["job_id"] for j in jobs.list()] == newest_first
+        failed = jobs.list(state="failed")
+        assert [j["job_id"] for j in failed] == [made[3], made[1]]
+        assert failed[0]["message"] == "no answer from the bootloader"
+        page = jobs.list(limit=2)
+        older = jobs.list(limit=2, before=page[-1]["job_id"])
+        assert [j["job_id"] for j in page + older] == newest_first[:4]
+        store.close()
+
+    asyncio.run(main())
