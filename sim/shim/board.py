@@ -15,6 +15,7 @@ in both places:
   board.set_input(pin, source)           level seen by an input Pin: 0/1, or a callable() -> 0/1
   board.set_pulse(pin, source)           what time_pulse_us(pin, level) measures: us, or callable(level) -> us
   board.set_encoder(pin_a, source)       a PCNT Encoder on phase_a=pin_a counts callable() -> edges
+                                         (without one, it decodes the levels set_input drives on its lines)
   board.watch_output(pin, callback)      callback(pin_id, level_or_duty) when the program drives the pin
 
 Callables are read when the program reads, so a sensor model computes its
@@ -37,10 +38,12 @@ class SimBoard:
         self.analog = {}  # pin -> int or callable
         self.inputs = {}  # pin -> 0/1 or callable
         self.pulses = {}  # pin -> us or callable(level)
-        self.encoders = {}  # phase_a pin -> callable() -> edges
+        self.encoder_sources = {}  # phase_a pin -> callable() -> edges
         self.output_watchers = {}  # pin -> [callback]
         self.pins = {}  # pin -> the last machine.Pin constructed on it
         self.pwms = {}  # pin -> the last machine.PWM constructed on it
+        self.uarts = {}  # uart id -> the last machine.UART constructed for it
+        self.pcnt_units = {}  # PCNT unit -> the machine.Encoder counting on it until its deinit()
         self.hardware_timers = {}  # timer id -> the clock handle every machine.Timer(id) shares
         self.bitstreams = []  # (pin, timing, bytes) the program sent (LED strips), last 64
         self.reset_requested = False
@@ -60,7 +63,8 @@ class SimBoard:
         self.analog[pin] = source
 
     def set_input(self, pin, source):
-        """Drive an input from outside; a constant level change fires the pin's IRQ like an edge would."""
+        """Drive an input from outside; a constant level change fires the pin's IRQ like an edge
+        would, and is counted by a PCNT unit whose A or B line it is."""
         listener = self.pins.get(pin)
         old = listener.value() if listener is not None else None
         self.inputs[pin] = source
@@ -68,12 +72,15 @@ class SimBoard:
             new = listener.value()
             if new != old:
                 listener._edge(new)
+        for unit in self.pcnt_units.values():
+            if pin == unit._phase_a or pin == unit._phase_b:
+                unit._line_changed()
 
     def set_pulse(self, pin, source):
         self.pulses[pin] = source
 
     def set_encoder(self, pin_a, source):
-        self.encoders[pin_a] = source
+        self.encoder_sources[pin_a] = source
 
     def watch_output(self, pin, callback):
         self.output_watchers.setdefault(pin, []).append(callback)
@@ -96,8 +103,14 @@ class SimBoard:
         return int(source(level) if callable(source) else source)
 
     def encoder_edges(self, pin_a):
-        source = self.encoders.get(pin_a)
+        source = self.encoder_sources.get(pin_a)
         return None if source is None else int(source())
+
+    def uart_reply_delay_us(self, wire_us):
+        """How long after a request is written its reply can be read: the request and the reply
+        crossing the wire (`wire_us` at the UART's baud rate) and the device's turnaround (a
+        serial-bus servo answers about 30 us after the request's last byte)."""
+        return wire_us + 30
 
     def i2c_bus(self, key):
         return self.i2c_devices.get(key, {})

@@ -218,26 +218,54 @@ class PWM:
         self._set(0)
 
 
+# Count change per (previous AB << 2 | new AB), AB = A << 1 | B; +1 for A leading B, as the ESP32
+# port's machine.Encoder counts; 0 where both lines changed at once.
+_QUADRATURE_STEP = (0, -1, 1, 0, 1, 0, 0, -1, -1, 0, 0, 1, 0, 1, -1, 0)
+
+
 class Encoder:
-    """ESP32 PCNT quadrature counter; counts what the board's encoder model reports for phase_a."""
+    """ESP32 PCNT quadrature counter: unit `id` counts the edges of its A/B lines, every edge with
+    phases=4, one per cycle with phases=1.
+
+    A model that reports the edges on phase_a (board.set_encoder: the simulator's wheels, whose
+    lines toggle too fast to be worth driving one by one) is counted as it reports them; otherwise
+    the unit decodes the levels driven onto its lines (board.set_input) edge by edge, as the
+    peripheral does. The unit is the board's (board.pcnt_units) until deinit() frees it.
+    """
 
     def __init__(self, id, phase_a=None, phase_b=None, **kwargs):
         self._id = id
-        self._offset = 0
+        self._phase_a = self._phase_b = None
         self.init(phase_a, phase_b, **kwargs)
 
     def init(self, phase_a=None, phase_b=None, filter_ns=0, phases=1, **kwargs):
         if phase_a is not None:
             self._phase_a = _pin_id(phase_a)
+        if phase_b is not None:
+            self._phase_b = _pin_id(phase_b)
+        self._filter_ns = filter_ns
         self._phases = phases
+        self._lines = self._line_levels()
+        self._decoded = 0  # edges decoded from the lines since init()
         self._offset = self._edges()
+        _sim().pcnt_units[self._id] = self
+
+    def _line_levels(self):
+        board = _sim()
+        levels = 0
+        for pin_id in (self._phase_a, self._phase_b):
+            pin = board.pins.get(pin_id)
+            levels = levels << 1 | (pin.value() if pin is not None else board.input_level(pin_id))
+        return levels
+
+    def _line_changed(self):
+        lines = self._line_levels()
+        self._decoded += _QUADRATURE_STEP[(self._lines << 2) | lines]
+        self._lines = lines
 
     def _edges(self):
         edges = _sim().encoder_edges(self._phase_a)
-        if edges is None:
-            return 0
-        # The model counts quadrature edges (x4); PCNT with phases=1 counts one edge per cycle.
-        return edges * self._phases // 4
+        return (self._decoded if edges is None else edges) * self._phases // 4
 
     def value(self, value=None):
         current = self._edges() - self._offset
@@ -246,7 +274,9 @@ class Encoder:
         return current
 
     def deinit(self):
-        pass
+        units = _sim().pcnt_units
+        if units.get(self._id) is self:
+            del units[self._id]
 
 
 # The ESP32-S3's four general-purpose timers; the port has no virtual (id -1) timers.
@@ -336,14 +366,13 @@ class RTC:
 
 
 class UART:
-    """A UART whose far end is a device model; replies arrive after the bytes' time on the wire."""
+    """A UART whose far end is a device model; a reply can be read once the board says it has
+    come back over the wire (board.uart_reply_delay_us)."""
 
     INV_TX = 1
     INV_RX = 2
     RTS = 1
     CTS = 2
-    # A serial-bus servo answers about this long after the request's last byte (return delay + firmware).
-    _TURNAROUND_US = 30
 
     def __init__(self, id, baudrate=115200, **kwargs):
         self._id = id
@@ -351,9 +380,12 @@ class UART:
         self._rx_ready_us = 0
         self._deinited = False
         self.init(baudrate, **kwargs)
+        _sim().uarts[id] = self
 
     def init(self, baudrate=115200, bits=8, parity=None, stop=1, tx=None, rx=None, timeout=0, **kwargs):
         self._baud = int(baudrate) or 115200
+        self._tx_pin = _pin_id(tx)
+        self._rx_pin = _pin_id(rx)
         self._timeout_ms = timeout
         self._deinited = False
 
@@ -377,7 +409,7 @@ class UART:
             reply = device.handle(data)
             if reply:
                 self._rx.extend(reply)
-                self._rx_ready_us = now + self._wire_us(len(data) + len(reply)) + self._TURNAROUND_US
+                self._rx_ready_us = now + board.uart_reply_delay_us(self._wire_us(len(data) + len(reply)))
         return len(data)
 
     def any(self):

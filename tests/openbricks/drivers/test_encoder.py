@@ -2,6 +2,7 @@
 
 import machine
 
+from fakes.dc_motor import ShaftEdges
 from fakes.expect import raises
 from openbricks import pins
 from openbricks.drivers.encoder import PCNTEncoder, QuadratureEncoder, make_encoder
@@ -63,13 +64,14 @@ def test_interrupt_decoder_pins_are_claimed_and_released():
 
 def test_pcnt_encoder_counts_x4_with_the_glitch_filter_and_invert():
     pins.reset_claims()
+    shaft = ShaftEdges(7)
     enc = PCNTEncoder(7, 8, unit=1, invert=True)
-    hw = machine.board.encoders[1]
-    assert (hw.phase_a, hw.phase_b, hw.phases, hw.filter_ns) == (7, 8, 4, 12787)
-    hw.count = 68028
-    assert enc.count() == -68028
+    hw = machine.board.pcnt_units[1]
+    assert (hw._phase_a, hw._phase_b, hw._phases, hw._filter_ns) == (7, 8, 4, 12787)
+    shaft.move(68028)
+    assert hw.value() == 68028 and enc.count() == -68028
     enc.reset(0)
-    assert hw.count == 0 and enc.count() == 0
+    assert hw.value() == 0 and enc.count() == 0
     enc.reset(500)
     assert enc.count() == 500
 
@@ -133,7 +135,7 @@ def test_make_encoder_counts_on_the_lowest_free_pcnt_unit():
     _idle_high(7, 8)
     enc = make_encoder(7, 8, name="left encoder")
     assert isinstance(enc, PCNTEncoder) and enc.unit == 1
-    assert machine.board.encoders[1].phase_a == 7
+    assert machine.board.pcnt_units[1]._phase_a == 7
     _spin(3)
     assert enc.count() == 12
     assert make_encoder(12, 13).unit == 3
@@ -150,7 +152,7 @@ def test_without_machine_encoder_the_pins_are_decoded_in_an_interrupt():
     pins.reset_claims()
     enc = _without_machine_encoder(lambda: make_encoder(7, 8, invert=True, unit=1))
     assert isinstance(enc, QuadratureEncoder)
-    assert 1 not in machine.board.encoders
+    assert 1 not in machine.board.pcnt_units
     _spin(2)
     assert enc.count() == -8
 

@@ -68,11 +68,11 @@ def _on_the_hub(test):
 
 def test_the_firmware_counts_on_its_native_counter_not_machine_encoder():
     def test():
-        before = dict(machine.board.encoders)
+        before = dict(machine.board.pcnt_units)
         enc = encoder.PCNTEncoder(7, 8, unit=1, filter=200, invert=True, counts_per_rev=68028)
         (hub,) = HubCounter.built
         assert hub.wiring == (7, 8, 1, 200)
-        assert machine.board.encoders == before
+        assert machine.board.pcnt_units == before
         hub.turn(3 * 68028)  # six wraps of the 16-bit counter
         assert enc.count() == -3 * 68028
         enc.reset(500)

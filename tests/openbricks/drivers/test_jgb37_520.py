@@ -93,22 +93,22 @@ def test_closed_loop_commands_need_the_native_core_and_say_so_when_it_is_missing
 def test_the_encoder_counts_on_a_free_pcnt_unit_where_the_runtime_has_one():
     m, lines = _motor()
     right = JGB37Motor(in1=9, in2=10, pwm=11, encoder_a=12, encoder_b=13, invert=True)
-    left_unit, right_unit = machine.board.encoders[0], machine.board.encoders[1]
-    assert (left_unit.phase_a, left_unit.phase_b, left_unit.phases) == (7, 8, 4)
-    assert (right_unit.phase_a, right_unit.phase_b) == (12, 13)
+    left_unit, right_unit = machine.board.pcnt_units[0], machine.board.pcnt_units[1]
+    assert (left_unit._phase_a, left_unit._phase_b, left_unit._phases) == (7, 8, 4)
+    assert (right_unit._phase_a, right_unit._phase_b) == (12, 13)
     assert not machine.board.pins[7]._handler  # no per-edge interrupt on the hub's CPU
     lines.move(330)
     assert approx(m.angle(), 90, 1e-6)
     QuadratureLines(12, 13).move(-660)
     assert approx(right.angle(), 180, 1e-6)
     m.close()
-    assert left_unit.deinited and pins.owner_of(7) is None
+    assert 0 not in machine.board.pcnt_units and pins.owner_of(7) is None  # the unit is free
 
 
 def test_pcnt_unit_pins_the_encoder_to_that_unit():
     pins.reset_claims()
     JGB37Motor(in1=1, in2=2, pwm=17, encoder_a=7, encoder_b=8, pcnt_unit=3)
-    assert machine.board.encoders[3].phase_a == 7 and 0 not in machine.board.encoders
+    assert machine.board.pcnt_units[3]._phase_a == 7 and 0 not in machine.board.pcnt_units
 
 
 def test_without_machine_encoder_the_encoder_counts_in_a_pin_interrupt():
@@ -118,7 +118,7 @@ def test_without_machine_encoder_the_encoder_counts_in_a_pin_interrupt():
         m, lines = _motor()
     finally:
         machine.Encoder = saved
-    assert not machine.board.encoders
+    assert not machine.board.pcnt_units
     assert machine.board.pins[7]._handler is not None
     lines.move(1320 + 330)
     assert approx(m.angle(), 450, 1e-6)

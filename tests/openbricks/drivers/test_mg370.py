@@ -2,6 +2,7 @@
 
 import machine
 
+from fakes.dc_motor import ShaftEdges
 from fakes.expect import approx, raises
 from openbricks import pins
 from openbricks.drivers.mg370 import MG370Motor
@@ -19,22 +20,24 @@ def _fresh():
 
 def test_angle_comes_from_the_pcnt_unit_at_68028_counts_per_turn():
     _fresh()
+    shaft = ShaftEdges(7)
     m = MG370Motor(in1=1, in2=2, pwm=17, encoder_a=7, encoder_b=8, pcnt_unit=1)
-    hw = machine.board.encoders[1]
-    assert (hw.phase_a, hw.phase_b, hw.phases) == (7, 8, 4)
-    hw.count += 68028 // 4
+    hw = machine.board.pcnt_units[1]
+    assert (hw._phase_a, hw._phase_b, hw._phases) == (7, 8, 4)
+    shaft.move(68028 // 4)
     assert approx(m.angle(), 90, 0.01)
     m.reset_angle(0)
-    hw.count -= 68028
+    shaft.move(-68028)
     assert approx(m.angle(), -360, 0.01)
 
 
 def test_invert_flips_the_pcnt_reading_with_the_bridge():
     _fresh()
+    shaft = ShaftEdges(7)
     m = MG370Motor(in1=1, in2=2, pwm=17, encoder_a=7, encoder_b=8, invert=True)
     m.dc(25)
     assert (machine.board.pins[1].value(), machine.board.pins[2].value()) == (0, 1)
-    machine.board.encoders[0].count -= 68028 // 2
+    shaft.move(-68028 // 2)
     assert approx(m.angle(), 180, 0.01)
 
 
@@ -50,7 +53,7 @@ def test_two_motors_need_two_pcnt_units():
 def test_pcnt_filter_reaches_the_peripheral():
     _fresh()
     MG370Motor(in1=1, in2=2, pwm=17, encoder_a=7, encoder_b=8, pcnt_unit=2, pcnt_filter=400)
-    assert machine.board.encoders[2].filter_ns == 5000
+    assert machine.board.pcnt_units[2]._filter_ns == 5000
 
 
 def test_without_machine_encoder_it_falls_back_to_the_interrupt_decoder():
@@ -64,7 +67,7 @@ def test_without_machine_encoder_it_falls_back_to_the_interrupt_decoder():
         m = MG370Motor(in1=1, in2=2, pwm=17, encoder_a=7, encoder_b=8)
     finally:
         machine.Encoder = saved
-    assert not machine.board.encoders
+    assert not machine.board.pcnt_units
     lines.move(1000)
     assert approx(m.angle(), 1000 * 360 / 68028, 1e-6)
     assert m._encoder.missed == 0

@@ -5,7 +5,7 @@ import time
 import _openbricks_native
 import machine
 
-from fakes.dc_motor import DCMotorRig, PCNTCount
+from fakes.dc_motor import DCMotorRig, ShaftEdges
 from fakes.expect import approx
 from openbricks import pins
 from openbricks.drivers.mg370 import MG370Motor
@@ -29,7 +29,7 @@ def test_run_angle_lands_within_a_fraction_of_a_degree():
         counts_per_rev=_CPR,
     )
     motor = MG370Motor(in1=1, in2=2, pwm=17, encoder_a=7, encoder_b=8, pcnt_unit=0)
-    DCMotorRig(plant, in1=1, in2=2, pwm=17, counts_per_rev=_CPR, encoder=PCNTCount(0))
+    DCMotorRig(plant, in1=1, in2=2, pwm=17, counts_per_rev=_CPR, encoder=ShaftEdges(7))
     tick = machine.Timer(0)
     tick.init(freq=1000, callback=lambda _t: _openbricks_native.motor_process.tick(time.ticks_ms()))
     motor.run_angle(300, -270, then="hold")

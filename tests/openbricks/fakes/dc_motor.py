@@ -8,7 +8,7 @@
 The rig is a timer on the virtual clock: every step it reads what the driver
 put on the bridge (IN1/IN2 levels and the EN duty), advances `plant` (any
 object with `step(duty_pct or None, dt_s)` and `angle_deg`; None = coasting),
-and moves the encoder (quadrature lines, or a PCNT unit's count) to the
+and moves the encoder (quadrature lines, or the edges a PCNT unit counts) to the
 plant's angle.
 """
 
@@ -38,14 +38,19 @@ class QuadratureLines:
             board.set_input(self.pin_b, level_b)
 
 
-class PCNTCount:
-    """The count a PCNT unit accumulates (the driver's machine.Encoder must exist first)."""
+class ShaftEdges:
+    """The edges a shaft's encoder puts on its A line, reported straight to the PCNT unit counting
+    that line (board.set_encoder), as the simulator's wheels report theirs."""
 
-    def __init__(self, unit):
-        self.unit = unit
+    def __init__(self, pin_a):
+        self.edges = 0
+        board.set_encoder(pin_a, self._edges)
+
+    def _edges(self):
+        return self.edges
 
     def move(self, counts):
-        board.encoders[self.unit].count += int(counts)
+        self.edges += int(counts)
 
 
 class DCMotorRig:
