@@ -159,6 +159,46 @@ expect_error(OSError, "no PCNT peripheral", native.PCNTEncoder, 1320, pin_a=7, p
 encoder.close()
 expect_error(ValueError, "was closed", encoder.count)
 
+
+# ICM-45686 core over a register model of the chip: setup, bursts, the heading, and a DriveBase that reads
+# it in C (heading=imu) with no Python call per tick.
+class ChipModel:
+    def __init__(self):
+        self.regs = bytearray(128)
+        self.regs[0x72] = 0xE9
+        self.gz = 0
+        self.bursts = 0
+
+    def transfer(self, data):
+        if data[0] & 0x80:
+            reg = data[0] & 0x7F
+            if reg == 0:
+                self.bursts += 1
+                block = bytes((0, 0, 0, 0, 0, 0x20, 0, 0, 0, 0, self.gz & 0xFF, (self.gz >> 8) & 0xFF))
+                return b"\x00" + block[: len(data) - 1]
+            return b"\x00" + bytes(self.regs[reg : reg + len(data) - 1])
+        if data[0] != 0x7F:
+            self.regs[data[0]] = data[1]
+        return bytes(len(data))
+
+
+chip = ChipModel()
+imu = native.ICM45686(chip.transfer, scale=-1.0)
+assert imu.stats() == (0, 0, True) and chip.regs[0x1C] == 0x25 and chip.regs[0x10] == 0x0F
+chip.gz = -2949  # a face-up chip turning clockwise at ~90 deg/s
+for i in range(101):
+    imu.sample(i * 1000)
+results["icm_heading"] = imu.heading()
+results["icm_gyro"] = list(imu.gyro())
+results["icm_accel"] = list(imu.acceleration())
+assert chip.bursts == 101 and imu.stats()[0] == 101
+assert native.ICM45686.HARDWARE is False
+expect_error(OSError, "no SPI peripheral", native.ICM45686, chip.transfer, sck=12, mosi=13, miso=11, cs=17)
+expect_error(OSError, "reads 0x00, expected 0xE9", native.ICM45686, lambda data: bytes(len(data)))
+db = native.DriveBase(56, 114, heading=imu)
+db.use_gyro(True)
+expect_error(TypeError, "or a native IMU", native.DriveBase, 56, 114, heading=42)
+
 # Serial-bus codec.
 scs = native.scs
 assert scs.ping(1) == bytes([0xFF, 0xFF, 0x01, 0x02, 0x01, 0xFB])

@@ -15,6 +15,7 @@ NAMES = (
     "DriveBase",
     "ImuYaw",
     "PCNTEncoder",
+    "ICM45686",
     "scs",
     "serial_bus",
     "MotorIO",

@@ -33,6 +33,7 @@ TYPES = (
     "ImuYaw",
     "SerialBus",
     "PCNTEncoder",
+    "ICM45686",
 )
 TYPE_DEFINITION = re.compile(r"MP_DEFINE_CONST_OBJ_TYPE\(\s*(\w+),\s*MP_QSTR_(\w+),(.*?)\);", re.S)
 

@@ -37,7 +37,8 @@ struct DriveBaseObject {
     PyObject *read[2];
     PyObject *write[2];
     PyObject *coast[2];
-    PyObject *heading; /* callable heading source (IO mode), or NULL */
+    PyObject *heading; /* heading source (IO mode): a callable, a native IMU, or NULL */
+    ob_heading_source_t native_heading; /* read_heading set when `heading` is a native IMU */
     PyObject *native_io[2]; /* MotorIO providers (left_io=, right_io=), or NULL */
     /* First error an IO callable raised during the current period, re-raised when it ends. */
     PyObject *error_type, *error_value, *error_tb;
@@ -235,6 +236,8 @@ static int DriveBase_clear(DriveBaseObject *self) {
         self->db.io[i].write_coast = NULL;
     }
     Py_CLEAR(self->heading);
+    self->native_heading.read_heading = NULL;
+    self->native_heading.ctx = NULL;
     Py_CLEAR(self->error_type);
     Py_CLEAR(self->error_value);
     Py_CLEAR(self->error_tb);
@@ -328,8 +331,11 @@ static int DriveBase_init(DriveBaseObject *self, PyObject *args, PyObject *kwarg
     if (heading == Py_None) {
         heading = NULL;
     }
-    if (heading != NULL && !PyCallable_Check(heading)) {
-        PyErr_Format(PyExc_TypeError, "DriveBase(): heading must be a callable returning degrees, got %R",
+    ob_heading_source_t native_heading = {NULL, NULL};
+    if (heading != NULL && !ob_py_icm45686_heading_source(heading, &native_heading) && !PyCallable_Check(heading)) {
+        PyErr_Format(PyExc_TypeError,
+                     "DriveBase(): heading must be a callable returning degrees or a native IMU "
+                     "(openbricks_native.ICM45686), got %R",
                      heading);
         return -1;
     }
@@ -356,6 +362,7 @@ static int DriveBase_init(DriveBaseObject *self, PyObject *args, PyObject *kwarg
         }
     }
     self->heading = Py_XNewRef(heading);
+    self->native_heading = native_heading;
     ob_drivebase_init(&self->db, &wheel_io[0], &wheel_io[1], diameter_mm, track_mm);
     self->db.watchdog_ms = watchdog_ms;
     if (given == 6 || native_given == 2) {
@@ -504,12 +511,15 @@ static PyObject *DriveBase_use_gyro(DriveBaseObject *self, PyObject *arg) {
     }
     if (has_io(self) && self->heading == NULL) {
         PyErr_SetString(PyExc_ValueError,
-                        "use_gyro(True) needs a heading source: pass heading=<callable returning degrees> "
-                        "to DriveBase(...)");
+                        "use_gyro(True) needs a heading source: pass heading=<callable returning degrees, or a "
+                        "native ICM45686> to DriveBase(...)");
         return NULL;
     }
-    /* Without IO callables the heading arrives through update(..., heading_deg). */
+    /* Without IO callables the heading arrives through update(..., heading_deg); a native IMU is read in C. */
     ob_heading_source_t source = {self->heading != NULL ? py_read_heading : NULL, self};
+    if (self->native_heading.read_heading != NULL) {
+        source = self->native_heading;
+    }
     ob_drivebase_use_gyro(&self->db, &source);
     Py_RETURN_NONE;
 }

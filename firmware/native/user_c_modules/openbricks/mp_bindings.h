@@ -143,6 +143,11 @@ extern const mp_obj_type_t ob_mp_servo_type;
 extern const mp_obj_type_t ob_mp_drivebase_type;
 extern const mp_obj_type_t ob_mp_imu_yaw_type;
 extern const mp_obj_type_t ob_mp_pcnt_encoder_type;
+extern const mp_obj_type_t ob_mp_icm45686_type;
+
+#include "drivebase.h"
+/* True and *source filled when obj is an ICM45686 (mp_icm45686.c): a DriveBase reads its heading in C. */
+bool ob_mp_icm45686_heading_source(mp_obj_t obj, ob_heading_source_t *source);
 extern const mp_obj_module_t ob_mp_scs_module;
 extern const mp_obj_type_t ob_mp_serial_bus_type;
 /* serial_bus(uart_id, tx=None, rx=None, baud=1000000, dir_pin=None) -> SerialBus (mp_serial_bus.c). */
@@ -168,6 +173,16 @@ void ob_mp_pcnt_esp32_open(int pin_a, int pin_b, int filter_cycles, ob_pcnt_t *p
 
 /* Stop the unit *pcnt counts on and give it back to the driver. */
 void ob_mp_pcnt_esp32_close(const ob_pcnt_t *pcnt);
+
+#include "spi.h"
+/*
+ * The SPI bus spi_id on sck/mosi/miso with one device on cs at hz and SPI mode `mode`, for a sensor
+ * core read in the hard tick (mp_spi_esp32.c); fills *spi. Raises OSError when it cannot be set up.
+ */
+void ob_mp_spi_esp32_open(int spi_id, int sck, int mosi, int miso, int cs, uint32_t hz, int mode, ob_spi_t *spi);
+
+/* Remove the device and free the bus opened for *spi. */
+void ob_mp_spi_esp32_close(const ob_spi_t *spi);
 #endif
 
 /* The module's motor_process (created on first use; see mp_scheduler.c). */

@@ -30,7 +30,8 @@ struct _drivebase_obj_t {
     mp_obj_t read[2]; /* MP_OBJ_NULL without IO callables */
     mp_obj_t write[2];
     mp_obj_t coast[2];
-    mp_obj_t heading; /* heading source callable, or MP_OBJ_NULL */
+    mp_obj_t heading; /* heading source: a callable, a native IMU, or MP_OBJ_NULL */
+    ob_heading_source_t native_heading; /* read_heading set when `heading` is a native IMU */
 };
 
 /* ---- Arguments. ---- */
@@ -195,9 +196,12 @@ static mp_obj_t drivebase_make_new(const mp_obj_type_t *type, size_t n_args, siz
         }
     }
     mp_obj_t heading = args[ARG_heading].u_obj;
-    if (heading != mp_const_none && !mp_obj_is_callable(heading)) {
+    ob_heading_source_t native_heading = {NULL, NULL};
+    if (heading != mp_const_none && !ob_mp_icm45686_heading_source(heading, &native_heading) &&
+        !mp_obj_is_callable(heading)) {
         mp_raise_msg_varg(&mp_type_TypeError,
-                          MP_ERROR_TEXT("DriveBase(): heading must be a callable returning degrees, not %s"),
+                          MP_ERROR_TEXT("DriveBase(): heading must be a callable returning degrees or a native IMU "
+                                        "(ICM45686), not %s"),
                           mp_obj_get_type_str(heading));
     }
 
@@ -206,6 +210,7 @@ static mp_obj_t drivebase_make_new(const mp_obj_type_t *type, size_t n_args, siz
     self->sub.tick_fn = NULL;
     self->sub.tick_ctx = NULL;
     self->heading = heading == mp_const_none ? MP_OBJ_NULL : heading;
+    self->native_heading = native_heading;
     ob_motor_io_t wheel_io[2] = {{0}, {0}};
     for (int i = 0; i < 2; i++) {
         self->slots[i].owner = self;
@@ -230,8 +235,9 @@ static mp_obj_t drivebase_make_new(const mp_obj_type_t *type, size_t n_args, siz
         self->sub.tick_fn = drivebase_tick_fn;
         self->sub.tick_ctx = self;
     }
-    /* Native wheels and no Python heading: a tick calls no Python, so the hard tick may run it. */
-    self->sub.hard_safe = native && self->heading == MP_OBJ_NULL;
+    /* Native wheels and no Python heading (none, or a native IMU read in C): a tick calls no Python, so
+     * the hard tick may run it. */
+    self->sub.hard_safe = native && (self->heading == MP_OBJ_NULL || native_heading.read_heading != NULL);
     return MP_OBJ_FROM_PTR(self);
 }
 
@@ -375,10 +381,13 @@ static mp_obj_t drivebase_use_gyro(mp_obj_t self_in, mp_obj_t enable_in) {
     }
     if (has_io(self) && self->heading == MP_OBJ_NULL) {
         mp_raise_ValueError(MP_ERROR_TEXT("use_gyro(True) needs a heading source: pass heading=<callable returning "
-                                          "degrees> to DriveBase(...)"));
+                                          "degrees, or a native ICM45686> to DriveBase(...)"));
     }
-    /* Without IO callables the heading arrives through update(..., heading_deg). */
+    /* Without IO callables the heading arrives through update(..., heading_deg); a native IMU is read in C. */
     ob_heading_source_t source = {self->heading != MP_OBJ_NULL ? io_read_heading : NULL, self};
+    if (self->native_heading.read_heading != NULL) {
+        source = self->native_heading;
+    }
     ob_drivebase_use_gyro(&self->db, &source);
     return mp_const_none;
 }
