@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import asyncio
 import logging
+import threading
 from dataclasses import asdict
 
 from ulid import ULID
@@ -50,6 +51,7 @@ class Recorder:
         self._lines: list[tuple] = []
         self._samples: list[tuple] = []
         self._pending = asyncio.Event()
+        self._writing = threading.Lock()  # held from taking the pending lines until they are committed
         bus.before_store_read = self.flush
 
     # -- HubEvents ---------------------------------------------------------------------------------------
@@ -168,25 +170,32 @@ class Recorder:
         return hub
 
     def flush(self) -> None:
-        """Write the pending output lines and samples in one transaction."""
-        if not self._lines and not self._samples:
-            return
-        lines, samples = self._lines, self._samples
-        self._lines, self._samples = [], []
-        try:
-            self.store.runs.append(lines, samples)
-        except BaseException:
-            self._lines[:0], self._samples[:0] = lines, samples  # kept for the next attempt
-            raise
+        """Write the pending output lines and samples in one transaction (any thread).
+
+        On return everything published so far is in the database, including lines a background write
+        had already taken: a reader of the store (a client catching up) must never miss them."""
+        with self._writing:
+            if not self._lines and not self._samples:
+                return
+            lines, samples = self._lines, self._samples
+            self._lines, self._samples = [], []
+            try:
+                self.store.runs.append(lines, samples)
+            except BaseException:
+                self._lines[:0], self._samples[:0] = lines, samples  # kept for the next attempt
+                raise
 
     async def flush_loop(self) -> None:
-        """Write pending output at most `flush_interval_s` after it arrived; sleeps while nothing does."""
+        """Write pending output at most `flush_interval_s` after it arrived; sleeps while nothing does.
+
+        The write runs in a worker thread: a commit that waits on the disk (a WAL checkpoint) must not
+        hold up the event loop, which meanwhile delivers live output to every client."""
         while True:
             await self._pending.wait()
             await asyncio.sleep(self.flush_interval_s)
             self._pending.clear()
             try:
-                self.flush()
+                await asyncio.to_thread(self.flush)
             except Exception:
                 log.exception("could not write output lines to the database; retrying")
                 self._pending.set()
