@@ -9,6 +9,7 @@ Prints `ready <url> <token> <pid>`; once CLIENTS WebSocket clients are subscribe
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import os
 import sys
 import time
@@ -73,7 +74,8 @@ def main(data_dir: str, hubs: str, rate: str, seconds: str, clients: str) -> Non
         task.cancel()
 
     app = create_app(config, services=[*SERVICES, producer])
-    uvicorn.Server(uvicorn_config(app)).run(sockets=[sock])
+    with contextlib.suppress(KeyboardInterrupt):  # the benchmark ends it with SIGINT
+        uvicorn.Server(uvicorn_config(app)).run(sockets=[sock])
 
 
 if __name__ == "__main__":
