@@ -130,9 +130,8 @@ class PCNTEncoder:
     def __init__(self, pin_a, pin_b, unit=0, filter=1023, invert=False, name="encoder", counts_per_rev=4):
         from machine import Pin
 
+        PCNTEncoder._close_leftovers()
         holder = PCNTEncoder._units.get(unit)
-        if holder is not None and not holder._live():
-            holder = None  # left over from a finished program: the launcher already took its pins back
         if holder is not None:
             raise ValueError(
                 "PCNT unit %d already counts the encoder on GPIO %d/%d; give each motor its own "
@@ -178,6 +177,16 @@ class PCNTEncoder:
     def _live(self):
         owner = pins.owner_of(self._pins[0])
         return owner is not None and owner[1] is self
+
+    @staticmethod
+    def _close_leftovers():
+        """Forget the encoders of a finished program (the launcher already took their pins back). A
+        native counter still holds a hardware unit and a hard-tick slot: those are given back here."""
+        for unit, holder in list(PCNTEncoder._units.items()):
+            if not holder._live():
+                if holder._native is not None:
+                    holder._native.close()
+                del PCNTEncoder._units[unit]
 
     def count(self):
         if self._native is not None:

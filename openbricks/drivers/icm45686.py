@@ -7,11 +7,16 @@ can be saved to NVS so the next boot starts corrected. The integrator is the
 C core (`_openbricks_native.ImuYaw`) when the firmware or host extension has
 it, the same algorithm in Python otherwise.
 
-Samples are taken on a periodic `machine.Timer` (`timer_id`, by default the
-hardware timer `openbricks.timers` assigns to the IMU, claimed there). With
-`timer_id=None` no timer is taken and every heading()/gyro() call samples
-instead, for a caller that polls fast enough (>= 10 Hz: longer gaps are not
-integrated, since the motion in between is unknown).
+On the firmware the chip is the native `_openbricks_native.ICM45686` (the C
+driver of firmware/native/icm45686.c on the ESP32's SPI): the 1 kHz hard tick
+takes one burst per millisecond and integrates the heading in C, and a drive
+base steering by this IMU reads that heading in C too (`native_heading()`), so
+no Python runs in its loop. Elsewhere (the simulator, the tests) samples are
+taken on a periodic `machine.Timer` (`timer_id`, by default the hardware timer
+`openbricks.timers` assigns to the IMU, claimed there). With `timer_id=None` no
+timer is taken and every heading()/gyro() call samples instead, for a caller
+that polls fast enough (>= 10 Hz: longer gaps are not integrated, since the
+motion in between is unknown).
 
 SPI (datasheet DS-000577): first byte = register | 0x80 for a read; sensor
 data at 0x00-0x0B little-endian, accel then gyro; -32768 means "no data".
@@ -93,6 +98,15 @@ class ICM45686(HeadingFrame):
         pins.claim(mosi, "ICM-45686 SPI MOSI", owner=self)
         pins.claim(miso, "ICM-45686 SPI MISO", owner=self, output=False)
         pins.claim(cs, "ICM-45686 SPI CS", owner=self)
+        self._wiring = "SCK=%d MOSI=%d MISO=%d CS=%d" % (sck, mosi, miso, cs)
+        self._pins = (sck, mosi, miso, cs)
+        self._timer = None
+        self._timer_id = timer_id
+        self._chip = None
+        hub_chip = _hub_chip()
+        if hub_chip is not None:
+            self._open_on_the_hard_tick(hub_chip, sck, mosi, miso, cs, hz, mode, scale, spi_id)
+            return
         self._cs = Pin(cs, Pin.OUT, value=1)
         self._spi = SPI(
             spi_id,
@@ -103,8 +117,6 @@ class ICM45686(HeadingFrame):
             mosi=Pin(mosi),
             miso=Pin(miso),
         )
-        self._wiring = "SCK=%d MOSI=%d MISO=%d CS=%d" % (sck, mosi, miso, cs)
-        self._pins = (sck, mosi, miso, cs)
         self._tx = bytearray(13)
         self._rx = bytearray(13)
         self._gyro = (0.0, 0.0, 0.0)
@@ -117,13 +129,36 @@ class ICM45686(HeadingFrame):
         self._configure()
         self._yaw = _new_integrator(scale)
         self._seed_from_nvs()
-        self._timer = None
         self._until_ownership_check = _OWNERSHIP_CHECK_SAMPLES
-        self._timer_id = timer_id
         if timer_id is not None:
             timers.claim(timer_id, _TIMER_ROLE, "pass timer_id= to ICM45686() (None samples on each read)")
             self._timer = Timer(timer_id)
             self._timer.init(mode=Timer.PERIODIC, period=max(1, 1000 // sample_hz), callback=self._on_timer)
+
+    def _open_on_the_hard_tick(self, hub_chip, sck, mosi, miso, cs, hz, mode, scale, spi_id):
+        """The firmware's C driver: it owns the SPI device and the hard tick samples it."""
+        _close_leftover_chips()
+        try:
+            self._chip = hub_chip(
+                sck=sck, mosi=mosi, miso=miso, cs=cs, hz=hz, mode=mode, spi_id=spi_id, scale=scale
+            )
+        except Exception:
+            for pin in self._pins:
+                pins.release(pin, self)
+            raise
+        _ON_THE_HARD_TICK.append(self)
+        self._configured = True
+        self._yaw = self._chip
+        self._seed_from_nvs()
+
+    def _live(self):
+        owner = pins.owner_of(self._pins[3])
+        return owner is not None and owner[1] is self
+
+    def native_heading(self):
+        """The heading source a drive base reads in C with no Python call (the firmware's hard-tick
+        driver), or None where this driver samples in Python."""
+        return self._chip
 
     # -- SPI ----------------------------------------------------------------------------------
 
@@ -204,7 +239,7 @@ class ICM45686(HeadingFrame):
         self._yaw.update(self._gyro[2], self._clock_us & 0xFFFFFFFF)
 
     def _fresh(self):
-        if self._timer is None:
+        if self._timer is None and self._chip is None:
             self._sample()
 
     # -- the IMU surface ------------------------------------------------------------------------
@@ -225,11 +260,15 @@ class ICM45686(HeadingFrame):
 
     def gyro(self):
         """(x, y, z) rates in deg/s from the latest sample, in the chip's frame."""
+        if self._chip is not None:
+            return self._chip.gyro()
         self._fresh()
         return self._gyro
 
     def acceleration(self):
         """(x, y, z) in g from the latest sample, in the chip's frame."""
+        if self._chip is not None:
+            return self._chip.acceleration()
         self._fresh()
         return self._accel
 
@@ -252,10 +291,16 @@ class ICM45686(HeadingFrame):
 
     def stats(self):
         """(reads_ok, read_errors, configured): sampling health."""
+        if self._chip is not None:
+            return self._chip.stats()
         return (self._reads_ok, self._read_errors, self._configured)
 
     def close(self):
-        """Stop background sampling and hand back the timer and the four GPIOs."""
+        """Stop background sampling and hand back the timer (or the SPI device) and the four GPIOs."""
+        if self._chip is not None:
+            self._chip.close()
+            if self in _ON_THE_HARD_TICK:
+                _ON_THE_HARD_TICK.remove(self)
         if self._timer is not None:
             self._timer.deinit()
             self._timer = None
@@ -279,6 +324,24 @@ class ICM45686(HeadingFrame):
 
     def __repr__(self):
         return "ICM45686(%s)" % self._wiring
+
+
+# Drivers whose chip the hard tick samples. A finished program's is closed when the next one builds an
+# IMU: the launcher takes its pins back, but its SPI device and hard-tick slot stay taken until then.
+_ON_THE_HARD_TICK = []
+
+
+def _close_leftover_chips():
+    for driver in list(_ON_THE_HARD_TICK):
+        if not driver._live():
+            driver._chip.close()
+            _ON_THE_HARD_TICK.remove(driver)
+
+
+def _hub_chip():
+    """The firmware's native ICM45686 when this build reads the SPI with it (the ESP32 image), else None."""
+    chip = _native.get("ICM45686")
+    return chip if chip is not None and chip.HARDWARE else None
 
 
 def _new_integrator(scale):

@@ -72,10 +72,12 @@ class DriveBase:
         if self._pair.closed_loop:
             kwargs = self._pair.controller_io()
             if self._heading is not None:
-                kwargs["heading"] = self._heading
-            self._controller = _native.DriveBase(
-                self.wheel_diameter_mm, self.axle_track_mm, **kwargs
-            )
+                # An IMU the firmware samples in C is read in C, so the controller stays on the hard
+                # tick; any other heading() is called from Python (continuous across +-180).
+                native_heading = getattr(imu, "native_heading", None)
+                source = native_heading() if native_heading is not None else None
+                kwargs["heading"] = source if source is not None else self._heading
+            self._controller = _native.DriveBase(self.wheel_diameter_mm, self.axle_track_mm, **kwargs)
             tick.ensure_running()
         # An open-loop pair has no controller to hold the settings; they are kept for settings() to
         # report, and apply to nothing until the motors have feedback.

@@ -108,3 +108,15 @@ def test_an_mg370_reads_its_angle_through_the_native_counter():
         assert hub.closed
 
     _on_the_hub(test)
+
+
+def test_a_finished_programs_counter_gives_its_unit_back_when_the_next_one_counts():
+    def test():
+        encoder.PCNTEncoder(7, 8, unit=0)
+        (first,) = HubCounter.built
+        pins.reset_claims()  # what the launcher does with a finished program's claims
+        encoder.PCNTEncoder(12, 13, unit=1)
+        assert first.closed  # its PCNT unit and hard-tick slot are free again
+        assert not HubCounter.built[1].closed
+
+    _on_the_hub(test)

@@ -161,10 +161,18 @@ static mp_obj_t icm45686_make_new(const mp_obj_type_t *type, size_t n_args, size
     raise_stashed(self);
     if (error == OB_ICM45686_NO_CHIP) {
         uint8_t who = self->imu.who_am_i;
+        const char *hint = who == 0x00 || who == 0xFF ? "nothing drives MISO: check wiring and 3V3" : "another chip?";
+        if (pins) {
+            mp_raise_msg_varg(&mp_type_OSError,
+                              MP_ERROR_TEXT("no ICM-45686 on SPI (SCK=%d MOSI=%d MISO=%d CS=%d): WHO_AM_I (0x72) reads "
+                                            "0x%02X, expected 0xE9; %s"),
+                              mp_obj_get_int(args[ARG_sck].u_obj), mp_obj_get_int(args[ARG_mosi].u_obj),
+                              mp_obj_get_int(args[ARG_miso].u_obj), mp_obj_get_int(args[ARG_cs].u_obj), (unsigned)who,
+                              hint);
+        }
         mp_raise_msg_varg(&mp_type_OSError,
                           MP_ERROR_TEXT("no ICM-45686 on SPI: WHO_AM_I (0x72) reads 0x%02X, expected 0xE9; %s"),
-                          (unsigned)who,
-                          who == 0x00 || who == 0xFF ? "nothing drives MISO: check wiring and 3V3" : "another chip?");
+                          (unsigned)who, hint);
     }
     if (error != OB_ICM45686_OK) {
         mp_raise_msg_varg(&mp_type_OSError, MP_ERROR_TEXT("ICM45686: %s"), ob_icm45686_strerror(error));
