@@ -15,12 +15,16 @@ difference (mpremote, the openbricks host client and paste-probe all parse these
 - raw-paste (`\\x05A\\x01`): `R\\x01`, the window as 16-bit little-endian, `\\x01` (a second window is
   free), then one `\\x01` each time a window of data has been consumed; the host's `\\x04` ends the
   data and is answered with `\\x04`, and the output follows as in raw mode. `\\x05` with any other
-  letter gets `R\\x00` (unsupported). A host that sends more than it was granted overflows a real
-  hub's stdin ring buffer: the excess is dropped here too (and counted), so the bug shows. A grant
-  counts from the next read of the link on: bytes that arrived together with the bytes that earned
-  it were sent before the host could have seen it;
+  letter, or on a build without raw-paste, gets `R\\x00` (unsupported). A host that sends more than
+  it was granted overflows a real hub's stdin ring buffer: the excess is dropped here too (and
+  counted), so the bug shows. A grant counts from the next read of the link on: bytes that arrived
+  together with the bytes that earned it were sent before the host could have seen it. Only the
+  first two windows, which the empty stdin ring holds, are for bytes already on their way: those
+  that waited in the ring while code ran and, where the ring's size is given, those a host sent
+  along with its request (one that knows the window from an earlier grant may);
 - while code runs, Ctrl-C interrupts it and every other byte waits as stdin; what the code did not
-  read is read by the REPL after it ends, as on the hub, where those bytes sit in the UART buffer.
+  read is read by the REPL after it ends, as on the hub, where those bytes sit in the UART buffer
+  (given its size, bytes beyond it are dropped and counted, as that ring would lose them).
 
 Nothing here does IO or runs code; the caller owns threads and locking.
 """
@@ -90,20 +94,27 @@ def _needs_more_input(source):
 class ReplProtocol:
     """The hub side of the REPL wire protocol; `write(bytes)` sends to the host."""
 
-    def __init__(self, write, banner=b"", paste_window=DEFAULT_PASTE_WINDOW):
+    def __init__(
+        self, write, banner=b"", paste_window=DEFAULT_PASTE_WINDOW, raw_paste=True, stdin_ring_bytes=None
+    ):
         if not 1 <= paste_window <= 0xFFFF:
             raise ValueError(f"paste_window={paste_window}: the window is a 16-bit byte count, 1..65535")
         self._write = write
         self.banner = banner if isinstance(banner, bytes) else banner.encode()
         self.paste_window = paste_window
+        self.raw_paste = raw_paste  # MICROPY_REPL_RAW_PASTE of the firmware build
+        self.stdin_ring_bytes = stdin_ring_bytes  # what waits for running code at most (None: no limit)
+        # Raw-paste bytes the ring holds beyond the two windows a paste request grants.
+        self._ring_slack = 0 if stdin_ring_bytes is None else max(0, stdin_ring_bytes - 2 * paste_window)
         self.raw_mode = False
-        self.overrun_bytes = 0  # raw-paste bytes a host sent beyond its window (dropped)
+        self.overrun_bytes = 0  # bytes a host sent beyond its raw-paste window or the stdin ring (dropped)
         self._line = bytearray()  # raw REPL line / friendly current line
         self._block = bytearray()  # friendly: completed lines of an unfinished compound statement
         self._paste = None  # bytearray while in friendly paste mode
         self._raw_paste = None  # bytearray while receiving raw-paste data
         self._credit = 0  # raw-paste bytes the host may still send
         self._grant_in_flight = 0  # granted during the current feed(): usable from the next one
+        self._replaying = False  # feeding what waited in the stdin ring while code ran
         self._since_ack = 0  # raw-paste bytes consumed since the last window grant
         self._escape = 0  # friendly: where we are in an escape sequence being swallowed
         self._after_cr = False
@@ -140,8 +151,10 @@ class ReplProtocol:
             if self._running is not None:
                 if byte == self.interrupt_char:
                     events.append(Interrupt())
-                else:
+                elif self.stdin_ring_bytes is None or len(self.stdin) < self.stdin_ring_bytes:
                     self.stdin.append(byte)
+                else:
+                    self.overrun_bytes += 1  # the ring is full: a real hub loses it
                 continue
             event = self._byte(byte)
             if event is not None:
@@ -165,7 +178,7 @@ class ReplProtocol:
             if len(line) == 2 and line[0] == CTRL_E:
                 command = line[1]
                 line.clear()
-                if command != ord("A"):
+                if command != ord("A") or not self.raw_paste:
                     self._write(b"R\x00>")
                     return None
                 return self._start_raw_paste()
@@ -196,8 +209,9 @@ class ReplProtocol:
         # The window size implicitly frees one window; the trailing 0x01 frees a second one.
         self._write(b"R\x01" + struct.pack("<H", window) + b"\x01")
         self._raw_paste = bytearray()
-        self._credit = 0
-        self._grant_in_flight = 2 * window
+        held = self._replaying or self.stdin_ring_bytes is not None
+        self._credit = 2 * window if held else 0
+        self._grant_in_flight = 0 if held else 2 * window
         self._since_ack = 0
         return None
 
@@ -213,7 +227,7 @@ class ReplProtocol:
                 return None
             self._running = PASTE
             return Execute(source, PASTE)
-        if self._credit <= 0:
+        if self._credit <= -self._ring_slack:
             self.overrun_bytes += 1  # a real hub's stdin ring buffer would have lost it
             return None
         self._credit -= 1
@@ -351,7 +365,11 @@ class ReplProtocol:
         self._running = None
         pending = bytes(self.stdin)
         self.stdin.clear()
-        return self.feed(pending)
+        self._replaying = True
+        try:
+            return self.feed(pending)
+        finally:
+            self._replaying = False
 
 
 def cooked(text):

@@ -1,15 +1,14 @@
-"""An emulated hub for the link tests and the upload benchmark: MicroPython's REPL byte for byte.
+"""An emulated hub for the link tests: the virtual hub's REPL protocol with scripted code behind it.
 
-It speaks the REPL the way the hub's `pyexec.c` does (friendly REPL, raw REPL, raw-paste with its
-flow-control window, Ctrl-C / Ctrl-D semantics, soft reboot) and executes commands with CPython in
-a worker thread, so output streams while a command runs and Ctrl-C interrupts it. Behind the REPL,
-`openbricks.host_calls` is an in-memory model of the hub's calls (info, set_rtc, staging with
-base64 + zlib + crc32 verification, read_file, reset, run); a staged program is Python source that
-runs with an interruptible `sleep_ms`.
+The bytes are the virtual hub's (sim/virtual_hub/repl.py: friendly, raw and raw-paste REPL, flow
+control, Ctrl-C / Ctrl-D, soft reboot), here over a stdin ring of the size a test picks, so a host
+that sends beyond a raw-paste grant or a full ring loses bytes as on a hub (`overflow_bytes`).
+What a test scripts is what runs behind them: commands run with CPython in a worker thread, so
+output streams while a command runs and Ctrl-C interrupts a program's `sleep_ms`; and
+`openbricks.host_calls` answers from memory (`files`, `run_logs`), with the faults a test asks for
+(calls the firmware lacks, calls that fail, a smaller read slice, damaged slices).
 
-It enforces what a real hub would punish: bytes beyond the raw-paste credit (plus the few bytes of
-slack the hub's stdin ring has) are dropped and counted in `overflow_bytes`, as the ring would.
-All methods run on the event loop's thread except the command thread, which posts back to it.
+Everything runs on the event loop's thread except the command thread, which posts back to it.
 """
 
 from __future__ import annotations
@@ -19,19 +18,19 @@ import base64
 import builtins
 import io
 import json
-import struct
 import threading
 import traceback
 import zlib
 from collections.abc import Callable
 
-RAW_BANNER = b"raw REPL; CTRL-B to exit\r\n"
-FRIENDLY_BANNER = (
+from openbricks_server.link.host_call import FRAME_PREFIX
+from openbricks_sim.virtual_hub.repl import SOFT_REBOOT, Interrupt, ReplProtocol, SoftReboot, cooked
+
+BANNER = (
     b"MicroPython v1.27.0 on 2026-01-01; openbricks hub with ESP32S3\r\n"
-    b'Type "help()" for more information.\r\n>>> '
+    b'Type "help()" for more information.\r\n'
 )
-FRAME_PREFIX = "@openbricks:"
-TRACEBACK_HEAD = b'Traceback (most recent call last):\r\n  File "<stdin>", line 1, in <module>\r\n'
+TRACEBACK_HEAD = 'Traceback (most recent call last):\n  File "<stdin>", line 1, in <module>\n'
 # The hub's stdin ring is a little larger than MICROPY_REPL_STDIN_BUFFER_MAX (260 for 256): room for a
 # Ctrl-D and the next raw-paste request that a host sends right after a full window.
 RING_SLACK_BYTES = 4
@@ -48,37 +47,35 @@ class ScriptedHub:
         compression: tuple[str, ...] = ("zlib",),
     ):
         self.name = name
-        self.window = stdin_buffer_max // 2
-        self.ring_bytes = stdin_buffer_max + RING_SLACK_BYTES
-        self.raw_paste = raw_paste
         self.compression = compression
         self.files: dict[str, bytes] = {}
-        self.overflow_bytes = 0
-        self.received = bytearray()
         self.commands: list[str] = []
-        self.epoch_ms: int | None = None
         self.runs = 0
         #: Each run's printed text by run number, as the hub's run log holds it (read_run pages it).
         self.run_logs: dict[int, str] = {}
         self.logging_run: int | None = None
         self.printed = (0, 0)  # bytes and crc32 of the running program's console output
-        self._send: Callable[[bytes], None] = lambda data: None
-        self._loop: asyncio.AbstractEventLoop | None = None
-        self._mode = "friendly"  # friendly | raw | paste | busy
-        self._line = bytearray()
-        self._paste = bytearray()
-        self._paste_consumed = 0
-        self._paste_credit = 0
-        self._pending = bytearray()  # input that arrived while a command ran
-        self._interrupt = threading.Event()
-        self._staging: dict | None = None
+        self.resets = 0
         #: Host calls this hub's firmware lacks (an older release): calling one raises AttributeError.
         self.missing_calls: set[str] = set()
-        self.resets = 0
+        #: Host calls that fail on this hub, with the exception each reports.
+        self.call_failures: dict[str, Exception] = {}
         #: Most bytes one read_file reply carries (the real hub's READ_FILE_MAX_BYTES).
         self.read_cap_bytes = 4096
-        #: Hook for tests: what read_file sends instead of a slice's bytes (a damaged link).
+        #: What read_file sends instead of a slice's bytes (a damaged link).
         self.corrupt_read: Callable[[bytes], bytes] = lambda data: data
+        self._send: Callable[[bytes], None] = lambda data: None
+        self._loop: asyncio.AbstractEventLoop | None = None
+        self._interrupt = threading.Event()
+        self._staging: dict | None = None
+        self.protocol = ReplProtocol(
+            lambda data: self._send(data),
+            banner=BANNER,
+            paste_window=stdin_buffer_max // 2,
+            raw_paste=raw_paste,
+            stdin_ring_bytes=stdin_buffer_max + RING_SLACK_BYTES,
+        )
+        self.protocol.execution_done()  # powered up: boot is over and the friendly prompt waits
 
     # -- wiring ---------------------------------------------------------------------------------
 
@@ -89,112 +86,30 @@ class ScriptedHub:
 
     @property
     def busy(self) -> bool:
-        return self._mode == "busy"
+        return self.protocol.running is not None
+
+    @property
+    def overflow_bytes(self) -> int:
+        return self.protocol.overrun_bytes
 
     def feed(self, data: bytes) -> None:
         """Bytes from the host, in order (on the loop's thread)."""
-        self.received += data
-        for value in data:
-            self._byte(value)
+        self._handle(self.protocol.feed(data))
 
-    # -- the REPL state machine -----------------------------------------------------------------
-
-    def _byte(self, c: int) -> None:
-        if self._mode == "busy":
-            if c == 0x03:
+    def _handle(self, events) -> None:
+        for event in events:
+            if isinstance(event, Interrupt):
                 self._interrupt.set()
-            elif len(self._pending) < self.ring_bytes:
-                self._pending.append(c)
+            elif isinstance(event, SoftReboot):
+                self._staging = None
+                self._send(SOFT_REBOOT)
+                self._handle(self.protocol.execution_done())
             else:
-                self.overflow_bytes += 1
-        elif self._mode == "paste":
-            self._paste_byte(c)
-        elif self._mode == "raw":
-            self._raw_byte(c)
-        else:
-            self._friendly_byte(c)
-
-    def _friendly_byte(self, c: int) -> None:
-        if c == 0x01:
-            self._mode = "raw"
-            self._line.clear()
-            self._send(b"\r\n" + RAW_BANNER + b">")
-        elif c == 0x03:
-            self._line.clear()
-            self._send(b"\r\n>>> ")
-        elif c == 0x04:
-            self._send(b"\r\nMPY: soft reboot\r\n" + FRIENDLY_BANNER)
-        elif c == 0x0D:
-            self._line.clear()
-            self._send(b"\r\n>>> ")
-        else:
-            self._line.append(c)
-            self._send(bytes((c,)))
-
-    def _raw_byte(self, c: int) -> None:
-        if c == 0x01:
-            if bytes(self._line) == b"\x05A" and self.raw_paste:
-                self._line.clear()
-                self._start_paste()
-                return
-            if bytes(self._line[:1]) == b"\x05":
-                self._line.clear()
-                self._send(b"R\x00>")
-                return
-            self._line.clear()
-            self._send(RAW_BANNER + b">")
-        elif c == 0x02:
-            self._mode = "friendly"
-            self._line.clear()
-            self._send(b"\r\n" + FRIENDLY_BANNER)
-        elif c == 0x03:
-            self._line.clear()
-        elif c == 0x04:
-            self._send(b"OK")
-            if not self._line:
-                self._soft_reboot()
-                return
-            source = bytes(self._line)
-            self._line.clear()
-            self._execute(source)
-        else:
-            self._line.append(c)
-
-    def _soft_reboot(self) -> None:
-        self._staging = None
-        self._send(b"\r\nMPY: soft reboot\r\n" + RAW_BANNER + b">")
-
-    def _start_paste(self) -> None:
-        self._mode = "paste"
-        self._paste.clear()
-        self._paste_consumed = 0
-        self._paste_credit = 2 * self.window
-        self._send(b"R\x01" + struct.pack("<H", self.window) + b"\x01")
-
-    def _paste_byte(self, c: int) -> None:
-        if self._paste_credit + RING_SLACK_BYTES <= 0:
-            # The host ignored flow control: a real ring would be full and this byte lost.
-            self.overflow_bytes += 1
-            return
-        self._paste_credit -= 1
-        if c in (0x03, 0x04):
-            self._mode = "busy"
-            self._send(b"\x04")
-            if c == 0x03:
-                self._finish(b"", b"Traceback (most recent call last):\r\nKeyboardInterrupt: \r\n")
-            else:
-                self._execute(bytes(self._paste))
-            return
-        self._paste.append(c)
-        self._paste_consumed += 1
-        if self._paste_consumed % self.window == 0:
-            self._paste_credit += self.window
-            self._send(b"\x01")
+                self._execute(event.source)
 
     # -- executing ------------------------------------------------------------------------------
 
     def _execute(self, source: bytes) -> None:
-        self._mode = "busy"
         self._interrupt.clear()
         text = source.decode("utf-8", "replace")
         self.commands.append(text)
@@ -207,7 +122,7 @@ class ScriptedHub:
         self._loop.call_soon_threadsafe(fn, *args)
 
     def _stdout(self, text: str) -> None:
-        self._post(self._send, text.replace("\n", "\r\n").encode())
+        self._post(self._send, cooked(text))
 
     def _program_print(self, text: str) -> None:
         """A running program's print: to the console, counted (bytes and crc32 as sent), and into its
@@ -217,12 +132,12 @@ class ScriptedHub:
             for piece in text.splitlines(keepends=True):
                 log += (LOG_STAMP if log == "" or log.endswith("\n") else "") + piece
             self.run_logs[self.logging_run] = log
-            sent = text.replace("\n", "\r\n").encode()
+            sent = cooked(text)
             self.printed = (self.printed[0] + len(sent), zlib.crc32(sent, self.printed[1]))
         self._stdout(text)
 
     def _run_command(self, text: str) -> None:
-        stderr = b""
+        error = None
         namespace = {"__name__": "__main__", "__builtins__": self._builtins()}
         try:
             exec(compile(text, "<stdin>", "exec"), namespace)  # noqa: S102 - the emulated hub runs host code
@@ -230,31 +145,20 @@ class ScriptedHub:
             self._post(self._boot)
             return
         except KeyboardInterrupt:
-            stderr = TRACEBACK_HEAD + b"KeyboardInterrupt: \r\n"
+            error = TRACEBACK_HEAD + "KeyboardInterrupt: \n"
         except BaseException as exc:  # noqa: BLE001 - every error is reported as the hub would
-            lines = traceback.format_exception_only(type(exc), exc)
-            stderr = TRACEBACK_HEAD + "".join(lines).replace("\n", "\r\n").encode()
-        self._post(self._finish, b"", stderr)
+            error = TRACEBACK_HEAD + "".join(traceback.format_exception_only(type(exc), exc))
+        self._post(self._finish, error)
+
+    def _finish(self, error: str | None) -> None:
+        self._handle(self.protocol.execution_done(error))
 
     def _boot(self) -> None:
         """After machine.reset(): a fresh hub in the friendly REPL, as after power-on."""
         self.resets += 1
         self._staging = None
-        self._pending.clear()
-        self._mode = "friendly"
-        self._send(b"\r\n" + FRIENDLY_BANNER)
-
-    def _finish(self, stdout: bytes, stderr: bytes) -> None:
-        self._send(stdout + b"\x04" + stderr + b"\x04>")
-        self._mode = "raw"
-        pending = bytes(self._pending)
-        self._pending.clear()
-        if pending:
-            self.feed_pending(pending)
-
-    def feed_pending(self, data: bytes) -> None:
-        for value in data:
-            self._byte(value)
+        self.protocol.start_boot()
+        self._finish(None)
 
     def sleep_ms(self, ms: int) -> None:
         """The hub program's sleep: Ctrl-C ends it with KeyboardInterrupt, as on the hub."""
@@ -272,9 +176,7 @@ class ScriptedHub:
         def hub_import(name, globals=None, locals=None, fromlist=(), level=0):
             if name == "openbricks.host_calls":
                 module = _HostCalls(hub)
-                if fromlist:
-                    return module
-                return _Package(host_calls=module)
+                return module if fromlist else _Package(host_calls=module)
             return builtins.__import__(name, globals, locals, fromlist, level)
 
         def hub_open(path, mode="r"):
@@ -300,7 +202,7 @@ class _Package:
 
 
 class _HostCalls:
-    """The hub's `openbricks.host_calls`, modelled: one result line per call."""
+    """The hub's `openbricks.host_calls` as the tests script it: one result line per call."""
 
     def __init__(self, hub: ScriptedHub):
         self.hub = hub
@@ -315,14 +217,18 @@ class _HostCalls:
         self._tag = str(nonce)
 
     def _frame(self, kind: str, payload: str = "") -> None:
-        self.hub._stdout(f"{FRAME_PREFIX}{self._tag} {kind}" + (f" {payload}" if payload else "") + "\n")
+        prefix = FRAME_PREFIX.decode()
+        self.hub._stdout(f"{prefix}{self._tag} {kind}" + (f" {payload}" if payload else "") + "\n")
 
     def _reply(self, result: dict) -> dict:
         self._frame("result", json.dumps(result))
         return result
 
-    def _call(self, fn, *args) -> dict:
+    def _call(self, name: str, fn, *args) -> dict:
         try:
+            failure = self.hub.call_failures.get(name)
+            if failure is not None:
+                raise failure
             result = fn(*args)
         except KeyboardInterrupt:
             raise
@@ -333,6 +239,7 @@ class _HostCalls:
 
     def info(self):
         return self._call(
+            "info",
             lambda: {
                 "protocol": 2,
                 "firmware": "openbricks 2.7.1 (emulated)",
@@ -346,15 +253,11 @@ class _HostCalls:
                 "compression": list(self.hub.compression),
                 "running": False,
                 "name": self.hub.name,
-            }
+            },
         )
 
     def set_rtc(self, epoch_ms):
-        def _set():
-            self.hub.epoch_ms = epoch_ms
-            return {"epoch_ms": epoch_ms}
-
-        return self._call(_set)
+        return self._call("set_rtc", lambda: {"epoch_ms": epoch_ms})
 
     def _inflate(self, data: bytes, compression) -> bytes:
         if compression is None:
@@ -374,7 +277,8 @@ class _HostCalls:
 
     def stage(self, payload, path="/program.mpy", encoding="base64", compression=None, size=None, crc32=None):
         return self._call(
-            lambda: self._commit(path, self._inflate(base64.b64decode(payload), compression), size, crc32)
+            "stage",
+            lambda: self._commit(path, self._inflate(base64.b64decode(payload), compression), size, crc32),
         )
 
     def stage_begin(self, path="/program.mpy"):
@@ -382,28 +286,30 @@ class _HostCalls:
             self.hub._staging = {"path": path, "data": bytearray()}
             return {"path": path}
 
-        return self._call(_begin)
+        return self._call("stage_begin", _begin)
+
+    def _staged(self) -> dict:
+        if self.hub._staging is None:
+            raise RuntimeError("no upload in progress: call stage_begin(path) first")
+        return self.hub._staging
 
     def stage_append(self, payload, encoding="base64"):
         def _append():
-            if self.hub._staging is None:
-                raise RuntimeError("no upload in progress: call stage_begin(path) first")
-            self.hub._staging["data"] += base64.b64decode(payload)
-            return {"received": len(self.hub._staging["data"])}
+            staging = self._staged()
+            staging["data"] += base64.b64decode(payload)
+            return {"received": len(staging["data"])}
 
-        return self._call(_append)
+        return self._call("stage_append", _append)
 
     def stage_end(self, compression=None, size=None, crc32=None):
         def _end():
-            staging = self.hub._staging
-            if staging is None:
-                raise RuntimeError("no upload in progress: call stage_begin(path) first")
+            staging = self._staged()
             self.hub._staging = None
             return self._commit(
                 staging["path"], self._inflate(bytes(staging["data"]), compression), size, crc32
             )
 
-        return self._call(_end)
+        return self._call("stage_end", _end)
 
     def read_file(self, path, offset=0, size=4096):
         def _read():
@@ -422,7 +328,7 @@ class _HostCalls:
                 "next_offset": end if end < len(whole) else None,
             }
 
-        return self._call(_read)
+        return self._call("read_file", _read)
 
     def reset(self):
         self._reply({"ok": True, "resetting": True})
@@ -447,7 +353,7 @@ class _HostCalls:
                 "total_bytes": len(data),
             }
 
-        return self._call(_read)
+        return self._call("read_run", _read)
 
     def run(self, path="/program.mpy", name=None):
         hub = self.hub

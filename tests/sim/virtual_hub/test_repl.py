@@ -135,6 +135,40 @@ def test_data_in_the_same_read_as_the_raw_paste_request_is_an_overrun():
     assert repl.overrun_bytes == 3
 
 
+def test_a_paste_request_typed_ahead_while_code_ran_uses_its_grant_at_once():
+    """Bytes that waited in the stdin ring were sent before the grant, but the ring holds them."""
+    repl, link = raw(paste_window=16)
+    repl.feed(b"print(0)\x04")
+    repl.feed(b"\x05A\x01" + b"a" * 32)  # the next command, right behind: into the stdin ring
+    assert repl.execution_done(None) == []
+    assert repl.overrun_bytes == 0 and repl.receiving_paste
+
+
+def test_with_its_size_given_the_stdin_ring_holds_what_a_host_sends_ahead_and_no_more():
+    link = Link()
+    repl = ReplProtocol(link.write, BANNER, 16, stdin_ring_bytes=36)
+    repl.execution_done(None)
+    repl.feed(b"\x01")
+    repl.feed(b"\x05A\x01" + b"a" * 37)  # two windows and the ring's 4 spare bytes fit, not one more
+    assert repl.overrun_bytes == 1
+    repl.feed(b"b" * 32)  # the windows granted while those were read
+    assert repl.overrun_bytes == 1
+    assert repl.feed(b"\x04") == [Execute(b"a" * 36 + b"b" * 32, PASTE)]
+    repl.feed(b"x" * 40)  # for the running code: the ring keeps 36 bytes of it
+    assert (len(repl.stdin), repl.overrun_bytes) == (36, 5)
+
+
+def test_a_firmware_without_raw_paste_refuses_it_with_r_nul():
+    link = Link()
+    repl = ReplProtocol(link.write, BANNER, raw_paste=False)
+    repl.execution_done(None)
+    repl.feed(b"\x01")
+    link.take()
+    repl.feed(b"\x05A\x01")
+    assert link.take() == b"R\x00>"
+    assert repl.feed(b"z=3\x04") == [Execute(b"z=3", RAW)]
+
+
 def test_raw_paste_cancelled_with_ctrl_c_reports_keyboard_interrupt_and_returns_to_the_prompt():
     repl, link = raw()
     repl.feed(b"\x05A\x01")
