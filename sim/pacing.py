@@ -43,6 +43,8 @@ class Pacer:
 
     speed is a real-time factor (1.0 = real time) or None (as fast as possible). `speed` and
     `paused` may be changed from any thread; a change takes effect at once, even mid-wait.
+    `on_behind(seconds)` hears of the wall time the simulation could not keep up with, whenever
+    pacing gives up on it and starts over from the present.
     While `wakeup` (an Event) is set nothing is held back: an interrupt is on its way to the
     program; call nudge() when it is set to cut a wait short.
     """
@@ -54,12 +56,14 @@ class Pacer:
         speed: float | None = 1.0,
         frame_hz: float = DEFAULT_FRAME_HZ,
         wakeup: threading.Event | None = None,
+        on_behind=None,
     ):
         if frame_hz <= 0:
             raise ValueError(f"frame_hz must be positive, not {frame_hz!r}")
         self._clock = clock
         self._on_frame = on_frame
         self._wakeup = wakeup
+        self._on_behind = on_behind
         self._frame_hz = float(frame_hz)
         self._speed = _checked_speed(speed)
         self._paused = False
@@ -162,6 +166,8 @@ class Pacer:
             due = anchor[0] + (sim_us - anchor[1]) / 1e6 / speed
             if now - due > MAX_LAG_S:
                 self._anchor = (now, sim_us)
+                if self._on_behind is not None:
+                    self._on_behind(now - due)
                 return
             if due <= now:
                 return

@@ -102,7 +102,7 @@ class VirtualHub:
         )
         # Real time at the prompt and in the launcher's idle loop (an idle hub must not spin the
         # physics flat out), the hub's speed while a program runs (_on_run).
-        self.pacer = self.world.simulation.pace(1.0, wakeup=self.gate.wakeup)
+        self.pacer = self.world.simulation.pace(1.0, wakeup=self.gate.wakeup, on_behind=self._fell_behind)
         self.gate.add_waiter(self.pacer.nudge)
         self.python = HubPython(
             self.fs,
@@ -238,6 +238,7 @@ class VirtualHub:
         """Run compiled hub code behind the interrupt gate; returns the exception it ended with."""
         if self._code_ended_at is not None:
             self.world.wall_time_passed(time.monotonic() - self._code_ended_at)
+            self.pacer.nudge()  # counted here: pacing must not count the wait at the prompt again
         outcome = None
         cost = PythonCost(self.world.clock)  # spinning code lets time pass, as on a hub
         try:
@@ -342,6 +343,12 @@ class VirtualHub:
     def _set_run_active(self, running):
         self.run_active = running
         self.pacer.speed = self.config.speed if running else 1.0
+
+    def _fell_behind(self, seconds):
+        """The CPU could not keep the simulation up with real time (a loaded machine): at real-time
+        speed the RTC still keeps real time, as a hub's own clock would."""
+        if self.pacer.speed == 1.0:
+            self.world.wall_time_passed(seconds)
 
     def _between_slices(self):
         if self._closing.is_set():

@@ -136,10 +136,10 @@ class HubWorld:
         self._timers.cancel_all()
 
     def wall_time_passed(self, seconds):
-        """The hub sat at its prompt for `seconds` of wall time, running no code. Simulated time only
-        passes while code runs, but the RTC is the hub's wall clock and keeps going, as a hub's
-        does: without this every prompt wait would set it back against the host's clock, and the
-        times stamped on run logs and printed by programs would drift from the host's."""
+        """`seconds` of wall time went by that simulated time did not follow (the hub sat at its
+        prompt running no code, or the CPU could not keep up). The RTC is the hub's wall clock and
+        keeps going, as a hub's does: without this every such moment would set it back against the
+        host's clock, and the times stamped on run logs and printed by programs would drift."""
         if seconds > 0:
             self.clock.set_epoch_ms(self.clock.epoch_us() // 1000 + int(seconds * 1000))
 

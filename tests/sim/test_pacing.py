@@ -179,6 +179,16 @@ def test_pacing_goes_on_after_an_interrupt_raised_while_held(sim):
     assert wall_time_to_advance(sim.clock, 500) == pytest.approx(0.5, rel=0.15, abs=0.03)
 
 
+def test_time_the_simulation_could_not_keep_up_with_is_reported(sim):
+    behind = []
+    pacer = Pacer(sim.clock, speed=1.0, on_behind=behind.append)
+    pacer.start()
+    sim.clock.advance_us(40_000)
+    time.sleep(0.5)  # the program's thread got no CPU: simulated time fell behind the wall clock
+    sim.clock.advance_us(40_000)
+    assert len(behind) == 1 and 0.4 < behind[0] < 0.7
+
+
 def test_a_speed_that_is_not_a_positive_number_is_refused(sim):
     pacer = Pacer(sim.clock, FrameCounter())
     with pytest.raises(ValueError, match="positive real-time factor"):

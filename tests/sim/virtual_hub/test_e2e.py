@@ -3,6 +3,7 @@ socket. What a host sees is what it would see on a hub flashed with openbricks."
 
 import base64
 import os
+import signal
 import struct
 import time
 import zlib
@@ -352,6 +353,29 @@ def test_the_rtc_keeps_the_hosts_time_while_the_hub_waits_at_its_prompt(host):
     out, err = host.exec_raw("from openbricks import log\nprint(log.epoch_ms())")
     assert not err, err
     assert abs(int(out) - int(time.time() * 1000)) < 300
+
+
+def test_the_rtc_keeps_real_time_when_the_computer_could_not_keep_the_hub_up_with_it(tmp_path):
+    """At real-time speed a hub that gets no CPU for a while (a loaded computer; here the process is
+    stopped for a second) falls behind in simulated time, but its RTC must not: it is the clock the
+    run logs are stamped with."""
+    hub = HubProcess(tmp_path / "RobotB", "RobotB")
+    link = Host(hub.pty)
+    try:
+        link.enter_raw()
+        link.call(f"h.set_rtc({int(time.time() * 1000)})")
+        link.write(b"import time\nfrom openbricks import log\ntime.sleep_ms(2000)\nprint(log.epoch_ms())\x04")
+        assert link.read_exactly(2) == b"OK"
+        time.sleep(0.5)
+        os.kill(hub.proc.pid, signal.SIGSTOP)
+        time.sleep(1.0)
+        os.kill(hub.proc.pid, signal.SIGCONT)
+        out = link.read_until(b"\x04", timeout_s=30)[:-1].decode()
+        assert abs(int(out) - int(time.time() * 1000)) < 300
+        link.read_until(b"\x04")
+    finally:
+        link.close()
+        assert hub.stop() == 0, hub.stderr()
 
 
 def test_run_logs_and_the_hub_name_survive_a_restart_of_the_hub(tmp_path):
