@@ -18,7 +18,7 @@ COUNTING = """from openbricks.tools import wait
 for i in range(20):
     print("count", i)
     wait(20)
-print("done counting")
+print("\\x1b[32mdone counting\\x1b[0m")  # in green, as a terminal shows it
 """
 
 LONG_LINES = 150
@@ -94,7 +94,9 @@ def wait_for(predicate, timeout_s: float = 30, what: str = "condition"):
 
 
 def pane_text(page, hub_name: str) -> str:
-    return page.locator(f"[data-testid=output-pane][data-hub='{hub_name}'] .xterm-rows").inner_text()
+    return page.locator(
+        f"[data-testid=output-pane][data-hub='{hub_name}'] [data-testid=terminal]"
+    ).inner_text()
 
 
 def downloaded_output(page, hub_name: str) -> str:
@@ -134,7 +136,8 @@ def test_two_hubs_run_at_once_each_terminal_shows_its_own_output_and_history_kee
     page.goto(page.url.split("#")[0] + "#/output")
     for name in names:
         page.wait_for_function(
-            "(name) => document.querySelector(`[data-testid=output-pane][data-hub='${name}'] .xterm-rows`)"
+            "(name) => document.querySelector("
+            "`[data-testid=output-pane][data-hub='${name}'] [data-testid=terminal]`)"
             "?.innerText.includes('done counting')",
             arg=name,
             timeout=60000,
@@ -143,6 +146,14 @@ def test_two_hubs_run_at_once_each_terminal_shows_its_own_output_and_history_kee
         text = pane_text(page, name)
         counts = [int(n) for n in re.findall(r"count (\d+)", text)]
         assert counts == list(range(20)), f"{name}: {counts}"
+        pane = page.locator(f"[data-testid=output-pane][data-hub='{name}']")
+        assert pane.locator("span.f2", has_text="done counting").count() == 1, "the ANSI green is lost"
+        assert "\x1b" not in text and "[32m" not in text
+    # Search finds a line and marks it.
+    pane = page.locator(f"[data-testid=output-pane][data-hub='{names[0]}']")
+    pane.get_by_role("searchbox").fill("COUNT 7")
+    pane.get_by_role("searchbox").press("Enter")
+    pane.locator(".mk", has_text="count 7").wait_for()
     screenshot(page, "output-two-hubs")
 
     finished = wait_for(
@@ -274,7 +285,7 @@ def test_a_dropped_event_stream_resumes_without_losing_or_repeating_a_line(conso
         page.goto(page.url.split("#")[0] + "#/output")
         last_count = (
             "([name, n]) => Math.max(-1, ...[...(document.querySelector("
-            "`[data-testid=output-pane][data-hub='${name}'] .xterm-rows`)?.innerText ?? '')"
+            "`[data-testid=output-pane][data-hub='${name}'] [data-testid=terminal]`)?.innerText ?? '')"
             ".matchAll(/long (\\d+)/g)].map((m) => +m[1])) >= n"
         )
         for cut in range(3):  # the stream drops three times while the hub prints
@@ -282,7 +293,8 @@ def test_a_dropped_event_stream_resumes_without_losing_or_repeating_a_line(conso
             page.evaluate("() => window.__sockets.at(-1).close()")
             page.wait_for_timeout(300)
         page.wait_for_function(
-            "(name) => document.querySelector(`[data-testid=output-pane][data-hub='${name}'] .xterm-rows`)"
+            "(name) => document.querySelector("
+            "`[data-testid=output-pane][data-hub='${name}'] [data-testid=terminal]`)"
             "?.innerText.includes('long done')",
             arg=name,
             timeout=60000,
