@@ -173,7 +173,8 @@ def test_two_hubs_run_at_once_each_terminal_shows_its_own_output_and_history_kee
     page.wait_for_function(
         "() => document.querySelector('[data-testid=run-output]').innerText.includes('done counting')"
     )
-    assert "count 19" in output.inner_text()
+    assert "count 19" in output.inner_text() and "[32m" not in output.inner_text()
+    page.locator("[data-testid=run-output] span.f2", has_text="done counting").wait_for()  # still green
     screenshot(page, "history-run")
 
     page.goto(page.url.split("#")[0] + "#/dashboard")

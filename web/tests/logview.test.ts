@@ -1,5 +1,5 @@
 import { describe, expect, it } from "vitest";
-import { PLAIN, parseLine, styleAttrs, xterm256 } from "../src/lib/ansi";
+import { PLAIN, linesHtml, parseLine, styleAttrs, xterm256 } from "../src/lib/ansi";
 import { LogLines } from "../src/lib/logview";
 import type { Entry } from "../src/lib/output";
 
@@ -26,6 +26,14 @@ describe("ANSI colours", () => {
     const rich = parseLine("\x1b[38;5;208ma\x1b[48;2;16;32;255mb");
     expect(styleAttrs(rich.runs[0].style!).css).toBe(`color:${xterm256(208)};`);
     expect(styleAttrs(rich.runs[1].style!).css).toContain("background:#1020ff;");
+  });
+
+  it("renders stored lines as HTML with their colours carried from line to line, markup escaped", () => {
+    expect(linesHtml(["\x1b[31m<red>", "still & red\x1b[0m", "plain"])).toEqual([
+      '<span class="f1">&lt;red&gt;</span>',
+      '<span class="f1">still &amp; red</span>',
+      "plain",
+    ]);
   });
 
   it("expands tabs to the next multiple of eight columns", () => {

@@ -132,6 +132,31 @@ export function styleAttrs(s: Style): { cls: string; css: string } {
   return { cls: cls.join(" "), css };
 }
 
+function escape(text: string): string {
+  return /[&<>]/.test(text) ? text.replace(/&/g, "&amp;").replace(/</g, "&lt;").replace(/>/g, "&gt;") : text;
+}
+
+/**
+ * One run of text as HTML, for an element of class `ansi` (app.css holds the palette); `mark` highlights
+ * it (a search match). The text is escaped, and styles are built from numbers only.
+ */
+export function runHtml(text: string, style: Style | null, mark = false): string {
+  const { cls, css } = style ? styleAttrs(style) : { cls: "", css: "" };
+  const classes = mark ? (cls ? `${cls} mk` : "mk") : cls;
+  if (!classes && !css) return escape(text);
+  return `<span${classes ? ` class="${classes}"` : ""}${css ? ` style="${css}"` : ""}>${escape(text)}</span>`;
+}
+
+/** Lines of output as HTML, each line's colours carrying to the next as in a terminal. */
+export function linesHtml(lines: string[]): string[] {
+  let style = PLAIN;
+  return lines.map((line) => {
+    const parsed = parseLine(line, style);
+    style = parsed.end;
+    return parsed.runs.map((r) => runHtml(r.text, r.style)).join("");
+  });
+}
+
 /** The xterm 256-colour palette's colours 16-255 (a 6x6x6 cube, then 24 greys). */
 export function xterm256(n: number): string {
   const hex = (v: number) => v.toString(16).padStart(2, "0");

@@ -6,7 +6,7 @@
  * of the page's main thread with ten hubs streaming.
  */
 
-import { PLAIN, type Run, type Style, parseLine, styleAttrs } from "./ansi";
+import { PLAIN, type Run, type Style, parseLine, runHtml as span } from "./ansi";
 import type { Entry } from "./output";
 import { stamp } from "./output";
 
@@ -32,17 +32,6 @@ const KIND_STYLE: Record<Entry["kind"], Style | null> = {
 };
 const STAMP_STYLE: Style = { ...PLAIN, fg: 8 };
 const STAMP_COLS = 13; // "hh:mm:ss.mmm "
-
-function escape(text: string): string {
-  return /[&<>]/.test(text) ? text.replace(/&/g, "&amp;").replace(/</g, "&lt;").replace(/>/g, "&gt;") : text;
-}
-
-function span(text: string, style: Style | null, mark: boolean): string {
-  const { cls, css } = style ? styleAttrs(style) : { cls: "", css: "" };
-  const classes = mark ? (cls ? `${cls} mk` : "mk") : cls;
-  if (!classes && !css) return escape(text);
-  return `<span${classes ? ` class="${classes}"` : ""}${css ? ` style="${css}"` : ""}>${escape(text)}</span>`;
-}
 
 export class LogLines {
   private lines: Line[] = [];
