@@ -49,22 +49,50 @@
 #define OB_SCS_FLAG_OVERCURRENT 0x08u /* phase current above the protection limit */
 #define OB_SCS_FLAG_OVERLOAD 0x20u    /* sustained load above the protection limit */
 
-/* STS memory table (little-endian 16-bit values, low byte at the lower address). */
+/*
+ * STS memory table (little-endian 16-bit values, low byte at the lower address). The one list of
+ * the registers the runtime, the simulator's emulated servos and the host tools use: both bindings
+ * export each as scs.REG_<NAME>.
+ */
 #define OB_SCS_REG_ID 0x05u
-#define OB_SCS_REG_MODE 0x21u             /* 0 position, 1 wheel, 2 open-loop duty, 3 step */
+#define OB_SCS_REG_RESPONSE_LEVEL 0x08u   /* 0: only PING and READ are answered, 1: every request */
+#define OB_SCS_REG_MIN_ANGLE 0x09u        /* angle limits, steps; min and max both 0 = multi-turn */
+#define OB_SCS_REG_MAX_ANGLE 0x0Bu
+#define OB_SCS_REG_MAX_TORQUE 0x10u       /* EEPROM torque ceiling, 0.1 % of stall */
+#define OB_SCS_REG_MODE 0x21u             /* OB_SCS_MODE_* */
 #define OB_SCS_REG_TORQUE_ENABLE 0x28u    /* 1 enable, 0 coast */
-#define OB_SCS_REG_ACCELERATION 0x29u
-#define OB_SCS_REG_GOAL_POSITION 0x2Au    /* sign-magnitude, bit 15 */
+#define OB_SCS_REG_ACCELERATION 0x29u     /* 100 steps/s^2; 0 = as fast as the motor can */
+#define OB_SCS_REG_GOAL_POSITION 0x2Au    /* sign-magnitude, bit 15; a relative step in step mode */
+#define OB_SCS_REG_GOAL_TIME 0x2Cu        /* in duty mode the signed duty, 0.1 %, sign bit 10 */
 #define OB_SCS_REG_GOAL_SPEED 0x2Eu       /* sign-magnitude, bit 15, steps/s */
+#define OB_SCS_REG_TORQUE_LIMIT 0x30u     /* 0.1 % of stall */
 #define OB_SCS_REG_LOCK 0x37u             /* 0 lets EEPROM writes (such as a new ID) persist */
-#define OB_SCS_REG_PRESENT_POSITION 0x38u /* sign-magnitude, bit 15 */
+#define OB_SCS_REG_PRESENT_POSITION 0x38u /* sign-magnitude, bit 15; steps still to go in step mode */
 #define OB_SCS_REG_PRESENT_SPEED 0x3Au    /* sign-magnitude, bit 15, steps/s */
 #define OB_SCS_REG_PRESENT_LOAD 0x3Cu     /* sign-magnitude, bit 10, 0.1 % of stall */
+#define OB_SCS_REG_PRESENT_VOLTAGE 0x3Eu  /* 0.1 V */
+#define OB_SCS_REG_PRESENT_TEMPERATURE 0x3Fu /* degrees C */
+#define OB_SCS_REG_MOVING 0x42u           /* 1 while the shaft turns */
+#define OB_SCS_REG_PRESENT_CURRENT 0x45u  /* sign-magnitude, bit 15 */
+/* Registers an emulated servo keeps: the table up to the last one above. */
+#define OB_SCS_REG_COUNT 0x50u
+
+/* Operating modes (REG_MODE). */
+#define OB_SCS_MODE_POSITION 0u /* to the goal position inside one turn (multi-turn with both limits 0) */
+#define OB_SCS_MODE_WHEEL 1u    /* the goal speed, under the acceleration register */
+#define OB_SCS_MODE_DUTY 2u     /* open loop: the duty in REG_GOAL_TIME */
+#define OB_SCS_MODE_STEP 3u     /* a relative step of REG_GOAL_POSITION, then holding */
+
+/* Encoder steps per output turn (ST-3215, ST-3032). */
+#define OB_SCS_COUNTS_PER_REV 4096u
+/* Present position in the multi-turn modes: a sign-magnitude window of +-32767 steps that wraps. */
+#define OB_SCS_MULTI_TURN_SPAN 65535u
 
 /* Where the direction bit sits in each sign-magnitude register. */
 #define OB_SCS_POSITION_SIGN_BIT 15u
 #define OB_SCS_SPEED_SIGN_BIT 15u
 #define OB_SCS_LOAD_SIGN_BIT 10u
+#define OB_SCS_DUTY_SIGN_BIT 10u
 
 /* Encoder failures (negative so they never collide with a byte count). */
 typedef enum {

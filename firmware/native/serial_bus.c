@@ -10,13 +10,7 @@
 #include "scs.h"
 
 #define DEG_PER_COUNT (360.0f / (float)OB_SERIAL_BUS_COUNTS_PER_REV)
-/* Present position in multi-turn mode: a sign-magnitude window of +-32767 counts that wraps. */
-#define MULTI_TURN_SPAN 65535
-#define MODE_WHEEL 1u
-#define MODE_DUTY 2u
-#define REG_MIN_ANGLE 0x09u
-#define REG_GOAL_TIME 0x2Cu /* the signed duty (0.1 %, sign in bit 10) in duty mode */
-#define DUTY_SIGN_BIT 10u
+#define MULTI_TURN_SPAN ((int32_t)OB_SCS_MULTI_TURN_SPAN)
 #define FEEDBACK_BYTES 6u /* present position, speed and load */
 /* A READ request, and its reply with the feedback bytes. */
 #define READ_REQUEST_BYTES (OB_SCS_FRAME_OVERHEAD + 2u)
@@ -198,10 +192,10 @@ ob_serial_bus_error_t ob_serial_bus_adopt(ob_serial_bus_t *bus, int servo_id, bo
     static const uint8_t off = 0u;
     static const uint8_t multi_turn[4] = {0u, 0u, 0u, 0u};
     static const uint8_t zero_duty[2] = {0u, 0u};
-    static const uint8_t duty_mode = MODE_DUTY;
+    static const uint8_t duty_mode = OB_SCS_MODE_DUTY;
     if (!transact(bus, packet, n, id, 0, NULL) || !write_register(bus, id, OB_SCS_REG_TORQUE_ENABLE, &off, 1) ||
-        !write_register(bus, id, REG_MIN_ANGLE, multi_turn, sizeof(multi_turn)) ||
-        !write_register(bus, id, REG_GOAL_TIME, zero_duty, sizeof(zero_duty)) ||
+        !write_register(bus, id, OB_SCS_REG_MIN_ANGLE, multi_turn, sizeof(multi_turn)) ||
+        !write_register(bus, id, OB_SCS_REG_GOAL_TIME, zero_duty, sizeof(zero_duty)) ||
         !write_register(bus, id, OB_SCS_REG_MODE, &duty_mode, 1)) {
         return OB_SERIAL_BUS_E_SILENT;
     }
@@ -232,10 +226,11 @@ ob_serial_bus_error_t ob_serial_bus_set_drive(ob_serial_bus_t *bus, int index, b
     if (slot == NULL) {
         return OB_SERIAL_BUS_E_SLOT;
     }
-    const uint8_t mode = wheel_mode ? MODE_WHEEL : MODE_DUTY;
+    const uint8_t mode = wheel_mode ? OB_SCS_MODE_WHEEL : OB_SCS_MODE_DUTY;
     static const uint8_t zero[2] = {0u, 0u};
     /* The new mode's goal register starts at rest: the servo must not jump to a stale one. */
-    if (!write_register(bus, slot->servo_id, wheel_mode ? OB_SCS_REG_GOAL_SPEED : REG_GOAL_TIME, zero, sizeof(zero)) ||
+    const uint8_t setpoint_reg = wheel_mode ? OB_SCS_REG_GOAL_SPEED : OB_SCS_REG_GOAL_TIME;
+    if (!write_register(bus, slot->servo_id, setpoint_reg, zero, sizeof(zero)) ||
         !write_register(bus, slot->servo_id, OB_SCS_REG_MODE, &mode, 1)) {
         return OB_SERIAL_BUS_E_SILENT;
     }
@@ -250,7 +245,7 @@ ob_serial_bus_error_t ob_serial_bus_release(ob_serial_bus_t *bus, int index) {
         return OB_SERIAL_BUS_E_SLOT;
     }
     static const uint8_t off = 0u;
-    static const uint8_t wheel_mode = MODE_WHEEL;
+    static const uint8_t wheel_mode = OB_SCS_MODE_WHEEL;
     /* Best effort: a silent servo is released all the same. */
     (void)write_register(bus, slot->servo_id, OB_SCS_REG_TORQUE_ENABLE, &off, 1);
     (void)write_register(bus, slot->servo_id, OB_SCS_REG_MODE, &wheel_mode, 1);
@@ -377,12 +372,12 @@ static void send_goals(ob_serial_bus_t *bus, bool wheel_mode) {
                 ob_scs_put_u16(&data[2 * count], ob_scs_sm_encode((int32_t)lroundf(steps), OB_SCS_SPEED_SIGN_BIT));
             } else {
                 float servo_duty = slot->sign * slot->duty_pct * 10.0f;
-                ob_scs_put_u16(&data[2 * count], ob_scs_sm_encode((int32_t)lroundf(servo_duty), DUTY_SIGN_BIT));
+                ob_scs_put_u16(&data[2 * count], ob_scs_sm_encode((int32_t)lroundf(servo_duty), OB_SCS_DUTY_SIGN_BIT));
             }
             count++;
         }
     }
-    sync_write(bus, wheel_mode ? OB_SCS_REG_GOAL_SPEED : REG_GOAL_TIME, 2, ids, data, count);
+    sync_write(bus, wheel_mode ? OB_SCS_REG_GOAL_SPEED : OB_SCS_REG_GOAL_TIME, 2, ids, data, count);
 }
 
 static void send_commands(ob_serial_bus_t *bus) {

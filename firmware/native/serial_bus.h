@@ -40,11 +40,12 @@
 #include <stdint.h>
 
 #include "ob_types.h"
+#include "scs.h"
 #include "servo.h"
 #include "uart.h"
 
 #define OB_SERIAL_BUS_MAX_SLOTS 8
-#define OB_SERIAL_BUS_COUNTS_PER_REV 4096
+#define OB_SERIAL_BUS_COUNTS_PER_REV ((int)OB_SCS_COUNTS_PER_REV)
 /* Failed reads in a row after which a slot counts as silent. */
 #define OB_SERIAL_BUS_SILENT_READS 3u
 /* Bus time the tick may spend, out of its 1000 us. */

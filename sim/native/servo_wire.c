@@ -30,12 +30,8 @@
 #include "uart.h"
 
 #define MAX_SERVOS 8
-#define COUNTS_PER_REV 4096.0
-#define MULTI_TURN_SPAN 65535
-#define REG_MIN_ANGLE 0x09u
-#define REG_GOAL_TIME 0x2Cu
-#define MODE_WHEEL 1u
-#define MODE_DUTY 2u
+#define COUNTS_PER_REV ((double)OB_SCS_COUNTS_PER_REV)
+#define MULTI_TURN_SPAN ((int32_t)OB_SCS_MULTI_TURN_SPAN)
 /* Wheel mode (drive="wheel"): the servo's own speed loop, feed-forward over its no-load speed
  * plus a proportional term, updated with every packet the engine sends (each tick). */
 #define WHEEL_NO_LOAD_DPS 888.0
@@ -96,9 +92,9 @@ static void apply(servo_t *servo) {
         return;
     }
     float duty = 0.0f;
-    if (servo->mode == MODE_DUTY) {
-        duty = (float)ob_scs_sm_decode(servo->duty_raw, 10) / 10.0f;
-    } else if (servo->mode == MODE_WHEEL) {
+    if (servo->mode == OB_SCS_MODE_DUTY) {
+        duty = (float)ob_scs_sm_decode(servo->duty_raw, OB_SCS_DUTY_SIGN_BIT) / 10.0f;
+    } else if (servo->mode == OB_SCS_MODE_WHEEL) {
         const WheelIOObject *wheel = servo->wheel;
         double goal_dps = ob_scs_sm_decode(servo->speed_raw, OB_SCS_SPEED_SIGN_BIT) * (360.0 / COUNTS_PER_REV);
         double speed_dps = wheel->sign * *wheel->wheel->qvel * RAD_TO_DEG;
@@ -118,10 +114,10 @@ static void write_registers(servo_t *servo, uint8_t address, const uint8_t *data
         } else if (reg == OB_SCS_REG_TORQUE_ENABLE) {
             servo->torque_on = data[i] != 0;
             touched = 1;
-        } else if (reg == REG_GOAL_TIME) {
+        } else if (reg == OB_SCS_REG_GOAL_TIME) {
             servo->duty_raw = (uint16_t)((servo->duty_raw & 0xFF00u) | data[i]);
             touched = 1;
-        } else if (reg == REG_GOAL_TIME + 1u) {
+        } else if (reg == OB_SCS_REG_GOAL_TIME + 1u) {
             servo->duty_raw = (uint16_t)((servo->duty_raw & 0x00FFu) | ((unsigned)data[i] << 8));
             touched = 1;
         } else if (reg == OB_SCS_REG_GOAL_SPEED) {

@@ -13,7 +13,7 @@ import openbricks_native
 from openbricks_native import scs
 
 BUDGET_US = 1000
-DEG_PER_COUNT = 360 / 4096
+DEG_PER_COUNT = 360 / scs.COUNTS_PER_REV
 
 
 class ScriptedServo:
@@ -46,17 +46,18 @@ class ScriptedServo:
 
     def write(self, address, data):
         registers = {address + i: b for i, b in enumerate(data)}
-        if 0x21 in registers:
-            self.mode = registers[0x21]
-        if 0x28 in registers:
-            self.torque = registers[0x28]
-        if 0x2C in registers and 0x2D in registers:
-            self.duty_raw = registers[0x2C] | registers[0x2D] << 8
+        if scs.REG_MODE in registers:
+            self.mode = registers[scs.REG_MODE]
+        if scs.REG_TORQUE_ENABLE in registers:
+            self.torque = registers[scs.REG_TORQUE_ENABLE]
+        if scs.REG_GOAL_TIME in registers and scs.REG_GOAL_TIME + 1 in registers:
+            self.duty_raw = registers[scs.REG_GOAL_TIME] | registers[scs.REG_GOAL_TIME + 1] << 8
 
     @property
     def duty_pct(self):
-        magnitude = (self.duty_raw or 0) & 0x3FF
-        return (-magnitude if (self.duty_raw or 0) & 0x400 else magnitude) / 10
+        raw, sign = self.duty_raw or 0, 1 << scs.DUTY_SIGN_BIT
+        magnitude = raw & (sign - 1)
+        return (-magnitude if raw & sign else magnitude) / 10
 
 
 class ScriptedBus:
@@ -124,7 +125,7 @@ def test_adoption_takes_the_servo_to_coasting_duty_mode_with_a_first_reading():
     slot = engine.adopt(1)
     assert slot == 0
     servo = bus.servos[1]
-    assert (servo.mode, servo.torque) == (2, 0)
+    assert (servo.mode, servo.torque) == (scs.MODE_DUTY, 0)
     assert engine.angle_deg(slot) == 0.0  # angles count from where the wheel was adopted
     assert engine.stats(slot) == (1, 0, 0)
 

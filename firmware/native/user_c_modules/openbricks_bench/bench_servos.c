@@ -6,13 +6,8 @@
 #include <math.h>
 #include <string.h>
 
-#define COUNTS_PER_REV 4096.0
-#define MULTI_TURN_SPAN 65535.0
-#define REG_MIN_ANGLE 0x09u
-#define REG_MAX_ANGLE 0x0Bu
-#define REG_GOAL_TIME 0x2Cu /* the signed duty in mode 2: 0.1 %, sign in bit 10 */
-#define MODE_WHEEL 1u
-#define MODE_DUTY 2u
+#define COUNTS_PER_REV ((double)OB_SCS_COUNTS_PER_REV)
+#define MULTI_TURN_SPAN ((double)OB_SCS_MULTI_TURN_SPAN)
 #define DUTY_TAU_S 0.05     /* speed response to a duty or speed step */
 #define FREEWHEEL_TAU_S 0.03 /* a coasting shaft behind the gearbox stops almost at once */
 #define MAX_STEP_S 0.001    /* integration step */
@@ -41,8 +36,8 @@ ob_bench_servo_t *ob_bench_bus_add(ob_bench_bus_t *bus, uint8_t id, uint32_t now
             memset(servo, 0, sizeof(*servo));
             servo->used = true;
             servo->regs[OB_SCS_REG_ID] = id;
-            servo->regs[OB_SCS_REG_MODE] = MODE_WHEEL;
-            ob_scs_put_u16(&servo->regs[REG_MAX_ANGLE], 4095u);
+            servo->regs[OB_SCS_REG_MODE] = OB_SCS_MODE_WHEEL;
+            ob_scs_put_u16(&servo->regs[OB_SCS_REG_MAX_ANGLE], 4095u);
             servo->counts = 2048.0;
             servo->last_us = now_us;
             return servo;
@@ -58,11 +53,12 @@ static double target_cps(const ob_bench_servo_t *servo, double no_load_cps, doub
         *tau_s = FREEWHEEL_TAU_S;
         return 0.0;
     }
-    if (servo->regs[OB_SCS_REG_MODE] == MODE_DUTY) {
-        double duty = ob_scs_sm_decode(ob_scs_get_u16(&servo->regs[REG_GOAL_TIME]), 10u) / 1000.0;
+    if (servo->regs[OB_SCS_REG_MODE] == OB_SCS_MODE_DUTY) {
+        uint16_t raw = ob_scs_get_u16(&servo->regs[OB_SCS_REG_GOAL_TIME]);
+        double duty = ob_scs_sm_decode(raw, OB_SCS_DUTY_SIGN_BIT) / 1000.0;
         return duty * no_load_cps;
     }
-    if (servo->regs[OB_SCS_REG_MODE] == MODE_WHEEL) {
+    if (servo->regs[OB_SCS_REG_MODE] == OB_SCS_MODE_WHEEL) {
         double goal = ob_scs_sm_decode(ob_scs_get_u16(&servo->regs[OB_SCS_REG_GOAL_SPEED]), OB_SCS_SPEED_SIGN_BIT);
         return fmax(-no_load_cps, fmin(no_load_cps, goal));
     }
@@ -92,8 +88,8 @@ double ob_bench_servo_angle_deg(ob_bench_servo_t *servo, double no_load_cps, uin
 
 /* Present position, speed and load into the register file, as the servo reports them. */
 static void refresh_feedback(ob_bench_servo_t *servo) {
-    bool multi_turn = ob_scs_get_u16(&servo->regs[REG_MIN_ANGLE]) == 0u &&
-                      ob_scs_get_u16(&servo->regs[REG_MAX_ANGLE]) == 0u;
+    bool multi_turn = ob_scs_get_u16(&servo->regs[OB_SCS_REG_MIN_ANGLE]) == 0u &&
+                      ob_scs_get_u16(&servo->regs[OB_SCS_REG_MAX_ANGLE]) == 0u;
     double counts = nearbyint(servo->counts);
     int32_t position;
     if (multi_turn) {

@@ -21,7 +21,7 @@
 #include "scs.h"
 
 #define OB_BENCH_MAX_SERVOS 8
-#define OB_BENCH_REGISTERS 0x50u
+#define OB_BENCH_REGISTERS OB_SCS_REG_COUNT
 
 typedef struct {
     bool used;
