@@ -364,23 +364,6 @@ def test_the_stop_press_halts_motors_at_once_and_refuses_new_motion():
         assert "duty after a new command 0" in lines
 
 
-def test_the_next_program_can_rewire_the_servo_bus_the_last_one_used():
-    from fakes.scs_servo import FakeServo, ScsBus
-
-    with tmpdir.scratch() as directory:
-        bus = ScsBus()
-        bus.add(FakeServo(1))
-        machine.board.attach_uart(1, bus)
-        motor = "from openbricks.drivers.st3032 import ST3032Motor\nST3032Motor(servo_id=1, rx=%d)\n"
-        hub = _hub(directory, motor % 41)
-        assert hub.run_program() == "finished"
-        # The adapter moved to the old RX pin (the manual's 2.5 wiring): the finished program's bus
-        # must not hold UART1 to its wiring.
-        _stage(directory, motor % 6)
-        assert hub.run_program() == "finished", "\n".join(_log_lines(directory))
-        assert pins.owner_of(41) is None and pins.owner_of(6) is None
-
-
 def test_a_press_with_nothing_staged_is_explained_and_the_button_keeps_working():
     with tmpdir.scratch() as directory:
         hub = launcher.Launcher(BUTTON, directory + "/program.py", log_dir=directory + "/logs")

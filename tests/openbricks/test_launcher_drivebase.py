@@ -5,7 +5,8 @@ import machine
 
 from fakes import tmpdir
 from fakes.scs_servo import FakeServo, ScsBus
-from openbricks import launcher, log
+from openbricks import launcher, log, pins
+from tests.openbricks.test_launcher import _hub, _log_lines, _stage
 
 NEEDS_NATIVE = True
 
@@ -50,3 +51,18 @@ def test_a_program_that_fails_mid_drive_leaves_the_wheels_free():
         assert "ValueError: lost the line" in log.read_run(0, directory + "/logs")
         for servo_id in (1, 2):
             assert not bus.servo(servo_id).torque_enabled, "servo %d still drives its wheel" % servo_id
+
+
+def test_the_next_program_can_rewire_the_servo_bus_the_last_one_used():
+    with tmpdir.scratch() as directory:
+        bus = ScsBus()
+        bus.add(FakeServo(1))
+        machine.board.attach_uart(1, bus)
+        motor = "from openbricks.drivers.st3032 import ST3032Motor\nST3032Motor(servo_id=1, rx=%d)\n"
+        hub = _hub(directory, motor % 41)
+        assert hub.run_program() == "finished"
+        # The adapter moved to the old RX pin (the manual's 2.5 wiring): the finished program's bus
+        # must not hold UART1 to its wiring.
+        _stage(directory, motor % 6)
+        assert hub.run_program() == "finished", "\n".join(_log_lines(directory))
+        assert pins.owner_of(41) is None and pins.owner_of(6) is None

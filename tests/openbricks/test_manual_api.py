@@ -11,10 +11,7 @@ import machine
 import openbricks
 from fakes import tmpdir
 from fakes.i2c_chips import TCS34725Chip
-from fakes.scs_servo import FakeServo, ScsBus
 from openbricks import bluetooth, host_calls, launcher, pins, tools
-from openbricks.drivers import st3215
-from openbricks.drivers.st3032 import ST3032Motor
 from openbricks.drivers.tcs34725 import TCS34725
 
 
@@ -32,20 +29,6 @@ def test_tcs34725_reflection_reads_the_lit_surface_0_to_100():
     assert sensor.reflection() == 0
     chip.light = (400, 100, 100, 100)
     assert 0 < sensor.reflection() <= 100 and sensor.reflection() == sensor.ambient()
-
-
-def test_serial_bus_motors_have_migrate_bus_to_native():
-    st3215.forget_buses()
-    pins.reset_claims()
-    bus = ScsBus()
-    bus.add(FakeServo(1))
-    machine.board.attach_uart(1, bus)
-    motor = ST3032Motor(servo_id=1, uart_id=1, tx=14, rx=41)
-    try:
-        ST3032Motor.migrate_bus_to_native(motor.bus, skip=())
-        raise AssertionError("a bus no engine owns has nothing to migrate to")
-    except RuntimeError as exc:
-        assert "DriveBase adopts its wheels first" in str(exc)
 
 
 def test_launcher_timing_constants_are_class_attributes_with_the_manuals_values():

@@ -27,7 +27,6 @@ class ServoRig:
         return sorted(self.bus.servos)
 
     def _serve(self):
-        pending = b""
         while not self._stop.is_set():
             ready, _, _ = select.select([self._master], [], [], 0.05)
             if not ready:
@@ -36,12 +35,8 @@ class ServoRig:
                 data = os.read(self._master, 4096)
             except OSError:
                 return
-            pending += data
-            if len(pending) < 6 or len(pending) < 4 + pending[3]:
-                continue  # wait for a whole packet: the bus model parses complete frames
-            reply = self.bus.handle(pending)
-            pending = b""
-            os.write(self._master, (data if self.echo else b"") + reply)
+            # The bus keeps a packet that arrives in pieces until its last byte is in.
+            os.write(self._master, (data if self.echo else b"") + self.bus.handle(data))
 
     def close(self):
         self._stop.set()

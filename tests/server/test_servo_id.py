@@ -5,6 +5,8 @@ import sys
 
 import pytest
 
+from openbricks_native import scs
+
 from .servo_rig import ServoRig
 
 
@@ -38,7 +40,7 @@ def test_a_lone_servo_is_re_ided_and_verified(rig):
     assert done.returncode == 0, done.stderr
     assert "servo 1 is now id 4 (read back from the servo)" in done.stdout
     assert rig.ids() == [4]
-    assert rig.bus.servo(4).regs[0x37] == 1  # EEPROM locked again
+    assert rig.bus.servo(4).regs[scs.REG_LOCK] == 1  # EEPROM locked again
 
 
 @pytest.mark.parametrize("rig", [([1, 2], False)], indirect=True)

@@ -5,7 +5,6 @@ them over an emulated wire with 1 Mbaud half-duplex byte timing."""
 import pytest
 
 import openbricks_native as native
-from openbricks_sim.serial_bus import MODE_DUTY, MODE_WHEEL
 from openbricks_sim.shim import Shim
 from openbricks_sim.simulation import Simulation
 
@@ -37,7 +36,7 @@ def test_the_driver_pings_and_runs_a_speed_on_the_servos_own_loop(sim):
     assert pose.x_mm > 300, "invert=True on the mirrored right servo: both wheels roll forward"
     assert abs(pose.heading_deg) < 1.0
     bus = sim.wiring.bus
-    assert bus.servo(1).mode == MODE_WHEEL and bus.servo(1).torque_enabled
+    assert bus.servo(1).mode == native.scs.MODE_WHEEL and bus.servo(1).torque_enabled
 
 
 def test_multi_turn_angle_follows_the_wheel_far_past_the_position_register_window(sim):
@@ -69,7 +68,7 @@ def test_open_loop_duty_spins_at_a_share_of_no_load_speed(sim):
     left, _ = motors()
     left.dc(50)
     time.sleep_ms(1000)
-    assert sim.wiring.bus.servo(1).mode == MODE_DUTY
+    assert sim.wiring.bus.servo(1).mode == native.scs.MODE_DUTY
     assert 300 < left.speed() < 450, "half duty: about half of 888 deg/s, less the robot's load"
 
 
@@ -86,7 +85,7 @@ def test_an_adopted_pair_runs_a_native_drivebase_from_the_bus_engine(sim):
     engine = _openbricks_native.serial_bus(1)
     left_slot = engine.adopt(1)
     right_slot = engine.adopt(2, invert=True)
-    assert sim.wiring.bus.servo(1).mode == MODE_DUTY
+    assert sim.wiring.bus.servo(1).mode == native.scs.MODE_DUTY
     db = native.DriveBase(88, 138, left_io=engine.motor_io(left_slot), right_io=engine.motor_io(right_slot))
     _openbricks_native.motor_process.subscribe(db)
     x0 = sim.physics.pose().x_mm

@@ -11,6 +11,8 @@ from openbricks.drivers import st3215
 from openbricks.drivers.st3032 import ST3032, ST3032Motor
 from openbricks.drivers.st3215 import ST3215Motor, SyncServoGroup
 
+NEEDS_NATIVE = True  # the servos are the simulator's, on the native SCS codec
+
 
 def _bus(*ids):
     st3215.forget_buses()
@@ -61,3 +63,17 @@ def test_drivebase_style_construction_from_the_manual():
     right = ST3032Motor(servo_id=2, uart_id=1, tx=14, rx=41, invert=True)
     assert (left.servo_id, left.invert, right.servo_id, right.invert) == (1, False, 2, True)
     assert left.max_dps == right.max_dps == 888.0
+
+
+def test_serial_bus_motors_have_migrate_bus_to_native():
+    st3215.forget_buses()
+    pins.reset_claims()
+    bus = ScsBus()
+    bus.add(FakeServo(1))
+    machine.board.attach_uart(1, bus)
+    motor = ST3032Motor(servo_id=1, uart_id=1, tx=14, rx=41)
+    try:
+        ST3032Motor.migrate_bus_to_native(motor.bus, skip=())
+        raise AssertionError("a bus no engine owns has nothing to migrate to")
+    except RuntimeError as exc:
+        assert "DriveBase adopts its wheels first" in str(exc)

@@ -5,21 +5,13 @@ import time
 import machine
 
 from fakes.expect import approx, raises
-from fakes.scs_servo import (
-    INST_SYNC_WRITE,
-    REG_GOAL_POSITION,
-    REG_GOAL_SPEED,
-    REG_MAX_ANGLE,
-    REG_MIN_ANGLE,
-    REG_TORQUE_LIMIT,
-    FakeServo,
-    ScsBus,
-    from_sign_magnitude,
-)
+from fakes.scs_servo import FakeServo, ScsBus, from_sign_magnitude, scs
 from openbricks import pins
 from openbricks.drivers import st3215
 from openbricks.drivers.st3215 import ST3215, ST3215Motor, SyncServoGroup
 from openbricks.parameters import Stop
+
+NEEDS_NATIVE = True  # the servos are the simulator's, on the native SCS codec
 
 
 def _bus(*ids):
@@ -33,7 +25,7 @@ def _bus(*ids):
 
 
 def _step_writes(servo):
-    return [from_sign_magnitude(d[0] | d[1] << 8, 15) for a, d in servo.writes if a == REG_GOAL_POSITION]
+    return [from_sign_magnitude(d[0] | d[1] << 8, 15) for a, d in servo.writes if a == scs.REG_GOAL_POSITION]
 
 
 # --- wheel mode and odometry ------------------------------------------------------------
@@ -291,7 +283,7 @@ def test_run_until_stalled_homes_gently_against_an_end_stop():
     original_write = servo.write
 
     def spy(address, data):
-        if address == REG_TORQUE_LIMIT:
+        if address == scs.REG_TORQUE_LIMIT:
             limits_seen.append(data[0] | data[1] << 8)
         original_write(address, data)
 
@@ -420,9 +412,9 @@ def test_sync_group_sets_every_speed_in_one_packet():
     index = ST3215Motor(2, invert=True)
     group = SyncServoGroup([thumb, index])
     group.set_goal_speeds([200, 150])
-    syncs = [p for p in bus.packets if p[1] == INST_SYNC_WRITE]
+    syncs = [p for p in bus.log if p[1] == scs.SYNC_WRITE]
     assert len(syncs) == 1
-    assert syncs[0][2][:2] == bytes((REG_GOAL_SPEED, 2))
+    assert syncs[0][2][:2] == bytes((scs.REG_GOAL_SPEED, 2))
     time.sleep_ms(1000)
     assert approx(bus.servo(1).speed_dps(), 200, 1)
     assert approx(bus.servo(2).speed_dps(), -150, 1)
@@ -478,7 +470,7 @@ def test_position_servo_moves_to_an_angle_inside_its_range():
     bus = _bus(4)
     arm = ST3215(4, min_raw=1024, max_raw=3072, range_deg=180)
     servo = bus.servo(4)
-    assert (servo.reg16(REG_MIN_ANGLE), servo.reg16(REG_MAX_ANGLE)) == (1024, 3072)
+    assert (servo.reg16(scs.REG_MIN_ANGLE), servo.reg16(scs.REG_MAX_ANGLE)) == (1024, 3072)
     servo.turn_shaft(90)  # horn starts at raw 1024 = 0 degrees of the range
     assert arm.move_to(90) is True
     time.sleep_ms(500)

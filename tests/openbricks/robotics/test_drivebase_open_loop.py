@@ -3,11 +3,9 @@ that needs feedback refuses with an error that says what to use instead.
 
 No native core is involved, so these run under MicroPython too."""
 
-import machine
 from machine import board
 
 from fakes.expect import approx, raises
-from fakes.scs_servo import FakeServo, ScsBus
 from openbricks import pins
 from openbricks.drivers import st3215
 from openbricks.drivers.l298n import L298NMotor
@@ -109,22 +107,6 @@ def test_done_is_always_true_and_odometry_is_refused():
         db.distance()
     with raises(RuntimeError, "needs wheel feedback"):
         db.use_gyro(True)
-
-
-def test_a_mixed_pair_is_refused():
-    from openbricks.drivers.st3032 import ST3032Motor
-
-    clean_slate()
-    bus = ScsBus()
-    bus.add(FakeServo(1))
-    machine.board.attach_uart(1, bus)
-    servo = ST3032Motor(servo_id=1)
-    bridge = L298NMotor(9, 10, 11)
-    with raises(
-        TypeError,
-        "the left motor (ST3032Motor) is a serial-bus servo but the right one (L298NMotor) is an open-loop",
-    ):
-        DriveBase(servo, bridge, wheel_diameter_mm=WHEEL_MM, axle_track_mm=TRACK_MM)
 
 
 def test_construction_checks_sizes_and_the_drive_mode():

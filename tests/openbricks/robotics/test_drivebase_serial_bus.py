@@ -9,11 +9,12 @@ import sys
 import time
 
 import _openbricks_native
+import machine
 
 from fakes.expect import approx, raises
-from fakes.scs_servo import REG_TORQUE_ENABLE
+from fakes.scs_servo import FakeServo, ScsBus, scs
 from openbricks import estop
-from tests.openbricks.robotics.robots import SERVO_WHEEL_MM, ServoRobot
+from tests.openbricks.robotics.robots import SERVO_TRACK_MM, SERVO_WHEEL_MM, ServoRobot, clean_slate
 
 NEEDS_NATIVE = True
 
@@ -81,7 +82,7 @@ def test_stop_coast_cuts_the_torque_of_both_servos():
     time.sleep_ms(400)
     db.stop()
     time.sleep_ms(2)
-    assert [servo.reg16(REG_TORQUE_ENABLE) & 0xFF for servo in robot.servos] == [0, 0]
+    assert [servo.reg16(scs.REG_TORQUE_ENABLE) & 0xFF for servo in robot.servos] == [0, 0]
 
 
 def test_stop_hold_with_wait_blocks_until_the_robot_is_at_rest():
@@ -143,7 +144,7 @@ def test_a_wheel_going_silent_mid_move_halts_both_and_raises_naming_the_motor():
             time.sleep_ms(10)
     assert "failed reads" in str(caught.value)
     # Halted at once: the right wheel was released rather than driven on alone.
-    assert robot.servos[1].reg16(REG_TORQUE_ENABLE) & 0xFF == 0
+    assert robot.servos[1].reg16(scs.REG_TORQUE_ENABLE) & 0xFF == 0
     assert robot.chassis.x_mm < 300
 
 
@@ -211,7 +212,7 @@ def test_estop_releases_an_adopted_wheel_under_a_direct_command_and_refuses_the_
     time.sleep_ms(300)
     estop.engage("test")
     time.sleep_ms(2)
-    assert robot.servos[0].reg16(REG_TORQUE_ENABLE) & 0xFF == 0
+    assert robot.servos[0].reg16(scs.REG_TORQUE_ENABLE) & 0xFF == 0
     with raises(estop.EStopError, "left wheel.run_speed refused: e-stop engaged"):
         robot.left.run_speed(100)
     robot.left.coast()  # releasing is always allowed
@@ -336,3 +337,21 @@ def test_drive_wheel_on_encoder_motors_says_they_have_no_speed_controller_of_the
     robot = EncoderRobot()
     with raises(ValueError, "selects the serial-bus servos' own speed controller; JGB37Motor / JGB37Motor"):
         DriveBase(robot.left, robot.right, wheel_diameter_mm=56, axle_track_mm=120, drive="wheel")
+
+
+def test_a_mixed_pair_is_refused():
+    from openbricks.drivers.l298n import L298NMotor
+    from openbricks.drivers.st3032 import ST3032Motor
+    from openbricks.robotics import DriveBase
+
+    clean_slate()
+    bus = ScsBus()
+    bus.add(FakeServo(1))
+    machine.board.attach_uart(1, bus)
+    servo = ST3032Motor(servo_id=1)
+    bridge = L298NMotor(9, 10, 11)
+    with raises(
+        TypeError,
+        "the left motor (ST3032Motor) is a serial-bus servo but the right one (L298NMotor) is an open-loop",
+    ):
+        DriveBase(servo, bridge, wheel_diameter_mm=SERVO_WHEEL_MM, axle_track_mm=SERVO_TRACK_MM)
