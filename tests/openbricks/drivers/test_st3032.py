@@ -10,18 +10,9 @@ from openbricks import pins
 from openbricks.drivers import st3215
 from openbricks.drivers.st3032 import ST3032, ST3032Motor
 from openbricks.drivers.st3215 import ST3215Motor, SyncServoGroup
+from tests.openbricks.drivers.test_st3215 import _bus
 
 NEEDS_NATIVE = True  # the servos are the simulator's, on the native SCS codec
-
-
-def _bus(*ids):
-    st3215.forget_buses()
-    pins.reset_claims()
-    bus = ScsBus()
-    for servo_id in ids:
-        bus.add(FakeServo(servo_id, no_load_dps=888.0))
-    machine.board.attach_uart(1, bus)
-    return bus
 
 
 def test_the_speed_clamp_defaults_to_the_datasheet_no_load_speed_not_the_st3215s_600():
