@@ -72,4 +72,7 @@ def __getattr__(name):
             "this build's _openbricks_native has no %s: the firmware is older than the runtime; "
             "reflash it with `openbricks flash`" % name
         )
+    # Kept as a module attribute: the next `_native.name` is a plain lookup, not this call. Drivers
+    # reach the cores on their hot paths, and on a hub every Python call costs CPU time.
+    globals()[name] = value
     return value

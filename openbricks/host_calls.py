@@ -34,7 +34,7 @@ import time
 import machine
 
 import openbricks
-from openbricks import launcher, log, pins, tools
+from openbricks import _native, launcher, log, pins, tools
 
 FRAME_PREFIX = "@openbricks:"
 PROTOCOL = 2  # 2: tagged frames (tag(), "program" and "result" frames)
@@ -52,9 +52,6 @@ RESET_GRACE_MS = 100  # lets the reset reply drain from the UART/BLE buffers bef
 WATCHED_NOTE = "watched: "  # the run log's record of the nonce a watched run's frames carry
 IDENTIFY_MAX_MS = 30000
 
-_REG_ID = 0x05  # STS EEPROM: bus id
-_REG_LOCK = 0x37  # STS: 0 unlocks EEPROM writes, 1 locks them again
-_INST_PING = 0x01
 _EPOCH_2000_MS = 946684800000
 
 _staging = {}  # the chunked upload in progress: path, part, file, received
@@ -625,10 +622,11 @@ def _open_bus(uart_id, tx, rx, baud):
     return st3215._SCServoBus.for_uart(uart_id, tx, rx, baud, None), existed
 
 
-def _scan(bus, first_id=0, last_id=253):
+def _scan(bus):
     found = []
-    for servo_id in range(first_id, last_id + 1):
-        if bus.request(servo_id, _INST_PING, b"", 1) is not None:
+    ping = _native.scs.PING
+    for servo_id in range(_native.scs.MAX_SERVO_ID + 1):
+        if bus.request(servo_id, ping, b"", 1) is not None:
             found.append(servo_id)
     return found
 
@@ -648,8 +646,12 @@ def servo_scan(uart_id=SERVO_UART_ID, tx=SERVO_TX, rx=SERVO_RX, baud=SERVO_BAUD)
 
 
 def _check_id(name, value):
-    if not isinstance(value, int) or not 0 <= value <= 253:
-        raise ValueError("%s=%r: servo bus ids are 0..253 (254 is broadcast)" % (name, value))
+    scs = _native.scs
+    if not isinstance(value, int) or not 0 <= value <= scs.MAX_SERVO_ID:
+        raise ValueError(
+            "%s=%r: servo bus ids are 0..%d (%d is broadcast)"
+            % (name, value, scs.MAX_SERVO_ID, scs.BROADCAST_ID)
+        )
 
 
 def _servo_set_id(new_id, old_id, uart_id, tx, rx, baud):
@@ -682,12 +684,13 @@ def _servo_set_id(new_id, old_id, uart_id, tx, rx, baud):
                 "id %d is already taken by another servo on the bus: pick a free id (in use: %s)"
                 % (new_id, ", ".join([str(i) for i in ids]))
             )
-        if bus.write(old_id, _REG_LOCK, b"\x00") is None:
+        scs = _native.scs
+        if bus.write(old_id, scs.REG_LOCK, b"\x00") is None:
             raise OSError("servo %d did not acknowledge the EEPROM unlock; nothing was changed" % old_id)
         # The servo answers an id write from its new id (or not at all): read-back is the real check.
-        bus.write(old_id, _REG_ID, bytes((new_id,)), 1)
-        bus.write(new_id, _REG_LOCK, b"\x01")
-        reply = bus.read(new_id, _REG_ID, 1)
+        bus.write(old_id, scs.REG_ID, bytes((new_id,)), 1)
+        bus.write(new_id, scs.REG_LOCK, b"\x01")
+        reply = bus.read(new_id, scs.REG_ID, 1)
         if reply is None or reply[1][0] != new_id:
             raise OSError(
                 "servo %d did not come back as id %d after the write: scan the bus to see where it is"

@@ -260,7 +260,11 @@ class EmulatedServo(ServoFirmware):
     def written(self, touched):
         if self.adopted_by is not None:
             return  # on the engine's wire; registers are kept but not acted on
-        if touched(scs.REG_TORQUE_LIMIT, 2) or touched(scs.REG_ACCELERATION) or touched(scs.REG_GOAL_SPEED, 2):
+        if (
+            touched(scs.REG_TORQUE_LIMIT, 2)
+            or touched(scs.REG_ACCELERATION)
+            or touched(scs.REG_GOAL_SPEED, 2)
+        ):
             self._configure()
         if (
             touched(scs.REG_TORQUE_ENABLE)
@@ -324,7 +328,7 @@ class ServoBus:
 
     def add(self, servo):
         if servo.servo_id in self.servos:
-            raise ValueError("servo id %d is already on this bus" % servo.servo_id)
+            raise ValueError(f"servo id {servo.servo_id} is already on this bus")
         self.servos[servo.servo_id] = servo
         return servo
 

@@ -10,49 +10,33 @@ Packet: 0xFF 0xFF ID LEN INSTR PARAMS... CHECKSUM, LEN = len(PARAMS) + 2,
 CHECKSUM = ~(ID + LEN + INSTR + sum(PARAMS)) & 0xFF. A reply carries the
 servo's status error flags where the request had its instruction.
 
-Registers used (STS memory map): 0x09/0x0B angle limits (both 0 = multi-turn),
-0x21 mode (0 position, 1 wheel, 2 open-loop duty, 3 step), 0x28 torque enable,
-0x29 acceleration (100 steps/s^2 units), 0x2A goal position (a signed relative
-step in mode 3), 0x2C goal time (the signed duty in mode 2), 0x2E goal speed,
-0x30 torque limit (0.1 %), 0x38 present position (steps still to go in mode 3),
-0x3A present speed, 0x3C present load (0.1 % of stall, sign in bit 10).
+Registers used (STS memory map): the angle limits (both 0 = multi-turn), mode
+(0 position, 1 wheel, 2 open-loop duty, 3 step), torque enable, acceleration
+(100 steps/s^2 units), goal position (a signed relative step in mode 3), goal
+time (the signed duty in mode 2), goal speed, torque limit (0.1 %), present
+position (steps still to go in mode 3), present speed and present load (0.1 %
+of stall). Their addresses, the instructions and the modes are the C codec's
+(`_openbricks_native.scs`, firmware/native/scs.h): one map for the firmware's
+bus engine, the simulator's servos and this driver.
 """
 
 import time
 
 from micropython import const
 
-from openbricks import estop, pins
+from openbricks import _native, estop, pins
 from openbricks.interfaces import Motor, Servo
 from openbricks.parameters import Stop, then_name
 
-_INST_PING = const(0x01)
-_INST_READ = const(0x02)
-_INST_WRITE = const(0x03)
-_INST_SYNC_WRITE = const(0x83)
-_BROADCAST_ID = const(0xFE)
+# The codec's namespace: bound once, as every register access reads it. None on an interpreter
+# without the cores (the tests' WebAssembly MicroPython), where this module still imports and
+# constructing a servo says what is missing.
+_scs = _native.get("scs")
 
-_REG_MIN_ANGLE = const(0x09)
-_REG_MODE = const(0x21)
-_REG_TORQUE_ENABLE = const(0x28)
-_REG_ACC = const(0x29)
-_REG_GOAL_POSITION = const(0x2A)
-_REG_GOAL_TIME = const(0x2C)
-_REG_GOAL_SPEED = const(0x2E)
-_REG_TORQUE_LIMIT = const(0x30)
-_REG_PRESENT_POSITION = const(0x38)
-
-_MODE_WHEEL = const(1)
-_MODE_DUTY = const(2)
-_MODE_STEP = const(3)
-
-COUNTS_PER_REV = const(4096)
-_COUNTS_PER_DEG = COUNTS_PER_REV / 360
-_DEFAULT_STEPS_PER_DPS = 4096 / 360  # goal/present speed registers count encoder steps per second
-# Present position in multi-turn modes is a sign-magnitude +-32767 window that wraps.
-_MULTI_TURN_SPAN = const(65535)
+# steps_per_dps default: the goal/present speed registers count encoder steps per second.
+_DEFAULT_STEPS_PER_DPS = None
 # One step write may cover +-7 turns (the STS multi-turn envelope); longer moves are chained.
-_MAX_STEP_COUNTS = const(7 * 4096)
+_MAX_STEP_TURNS = const(7)
 
 # A step has parked once it is within tolerance and turning slower than this (about 4 deg/s).
 _PARKED_CPS = const(50)
@@ -60,8 +44,12 @@ _PARKED_CPS = const(50)
 _REPLY_TIMEOUT_US = const(3000)
 _ATTEMPTS = const(2)
 
-_OVERLOAD_FLAG = const(0x20)
 _FAULT_NAMES = ("voltage", "angle sensor", "temperature", "current", "angle", "overload")
+
+
+def _codec():
+    """The SCS codec of the native cores, or the ImportError that says this build has none."""
+    return _native.scs if _scs is None else _scs
 
 
 def _sign_magnitude(value, sign_bit):
@@ -258,18 +246,18 @@ class _SCServoBus:
         return None
 
     def ping(self, servo_id):
-        return self.request(servo_id, _INST_PING, b"") is not None
+        return self.request(servo_id, _scs.PING, b"") is not None
 
     def read(self, servo_id, address, length):
         """(status, data) or None."""
-        reply = self.request(servo_id, _INST_READ, bytes((address, length)))
+        reply = self.request(servo_id, _scs.READ, bytes((address, length)))
         if reply is None or len(reply[1]) != length:
             return None
         return reply
 
     def write(self, servo_id, address, data, attempts=_ATTEMPTS):
         """Status byte of the acknowledgement, or None if the servo never acknowledged."""
-        reply = self.request(servo_id, _INST_WRITE, bytes((address,)) + bytes(data), attempts)
+        reply = self.request(servo_id, _scs.WRITE, bytes((address,)) + bytes(data), attempts)
         return None if reply is None else reply[0]
 
     def sync_write(self, address, width, items):
@@ -283,7 +271,7 @@ class _SCServoBus:
                 )
             params.append(servo_id)
             params.extend(data)
-        self._send(_packet(_BROADCAST_ID, _INST_SYNC_WRITE, params))
+        self._send(_packet(_scs.BROADCAST_ID, _scs.SYNC_WRITE, params))
 
 
 def forget_buses():
@@ -296,8 +284,12 @@ class _BusServo:
     """What ST3215 and ST3215Motor share: the bus, the id, error reporting, pings."""
 
     def _attach(self, servo_id, uart_id, tx, rx, baud, dir_pin):
-        if not isinstance(servo_id, int) or not 0 <= servo_id <= 253:
-            raise ValueError("servo_id=%r: bus ids are 0..253 (254 is broadcast)" % (servo_id,))
+        scs = _codec()
+        if not isinstance(servo_id, int) or not 0 <= servo_id <= scs.MAX_SERVO_ID:
+            raise ValueError(
+                "servo_id=%r: bus ids are 0..%d (%d is broadcast)"
+                % (servo_id, scs.MAX_SERVO_ID, scs.BROADCAST_ID)
+            )
         self.servo_id = servo_id
         self.bus = _SCServoBus.for_uart(uart_id, tx, rx, baud, dir_pin)
         self.side = None  # set by an adopter, e.g. "left wheel"; names the motor in errors
@@ -323,7 +315,7 @@ class _BusServo:
 
     def _note_status(self, status):
         self._faults = status
-        if status & _OVERLOAD_FLAG:
+        if status & _scs.FLAG_OVERLOAD:
             self._torque = False  # overload protection unloaded the servo; the next command re-arms it
 
     def _read(self, address, length):
@@ -379,8 +371,8 @@ class ST3215(_BusServo, Servo):
         self.max_raw = max_raw
         self.range_deg = range_deg
         self._attach(servo_id, uart_id, tx, rx, baud, dir_pin)
-        self._write(_REG_MIN_ANGLE, bytes((min_raw & 0xFF, min_raw >> 8, max_raw & 0xFF, max_raw >> 8)))
-        self._write(_REG_MODE, b"\x00")
+        self._write(_scs.REG_MIN_ANGLE, bytes((min_raw & 0xFF, min_raw >> 8, max_raw & 0xFF, max_raw >> 8)))
+        self._write(_scs.REG_MODE, bytes((_scs.MODE_POSITION,)))
         estop.on_engage(self.coast)
 
     def _raw_for(self, angle_deg):
@@ -399,10 +391,10 @@ class ST3215(_BusServo, Servo):
             )
         estop.check("%s move_to()" % type(self).__name__)
         raw_speed = 0 if speed is None else max(0, min(32767, int(speed)))
-        self._write(_REG_TORQUE_ENABLE, b"\x01")
+        self._write(_scs.REG_TORQUE_ENABLE, b"\x01")
         goal = self._raw_for(angle_deg)
         self._write(
-            _REG_GOAL_POSITION, bytes((goal & 0xFF, goal >> 8, 0, 0, raw_speed & 0xFF, raw_speed >> 8))
+            _scs.REG_GOAL_POSITION, bytes((goal & 0xFF, goal >> 8, 0, 0, raw_speed & 0xFF, raw_speed >> 8))
         )
         if not wait:
             return True
@@ -418,14 +410,14 @@ class ST3215(_BusServo, Servo):
 
     def angle(self):
         """Shaft angle in degrees within the range, or None if the servo did not answer."""
-        data = self._read(_REG_PRESENT_POSITION, 2)
+        data = self._read(_scs.REG_PRESENT_POSITION, 2)
         if data is None:
             return None
         return (_u16(data, 0) - self.min_raw) * self.range_deg / (self.max_raw - self.min_raw)
 
     def coast(self):
         """Release the horn (torque off)."""
-        self._write(_REG_TORQUE_ENABLE, b"\x00")
+        self._write(_scs.REG_TORQUE_ENABLE, b"\x00")
 
 
 class _StepMove:
@@ -480,6 +472,9 @@ class ST3215Motor(_BusServo, Motor):
         raise_on_stall=False,
         stall_idle_ms=1000,
     ):
+        counts_per_rev = _codec().COUNTS_PER_REV
+        if steps_per_dps is None:
+            steps_per_dps = counts_per_rev / 360
         if steps_per_dps <= 0 or max_dps <= 0 or accel_dps2 < 0 or stall_idle_ms <= 0:
             raise ValueError(
                 "steps_per_dps=%r, max_dps=%r, stall_idle_ms=%r must be > 0 and accel_dps2=%r >= 0"
@@ -496,6 +491,7 @@ class ST3215Motor(_BusServo, Motor):
         self._cap_stack = []
         self._cap_pct = 100
         self._sign = -1 if self.invert else 1
+        self._counts_per_deg = counts_per_rev / 360
         # Angle tracking, in servo counts (servo frame).
         self._counts = 0.0
         self._offset_deg = 0.0
@@ -508,12 +504,12 @@ class ST3215Motor(_BusServo, Motor):
         self._remaining = 0
         self._attach(servo_id, uart_id, tx, rx, baud, dir_pin)
         self._torque = False
-        self._write(_REG_TORQUE_ENABLE, b"\x00")
-        self._write(_REG_MIN_ANGLE, b"\x00\x00\x00\x00")  # multi-turn: see the class docstring
-        self._write(_REG_ACC, bytes((self._acc_register(),)))
-        self._write(_REG_GOAL_SPEED, b"\x00\x00")
+        self._write(_scs.REG_TORQUE_ENABLE, b"\x00")
+        self._write(_scs.REG_MIN_ANGLE, b"\x00\x00\x00\x00")  # multi-turn: see the class docstring
+        self._write(_scs.REG_ACCELERATION, bytes((self._acc_register(),)))
+        self._write(_scs.REG_GOAL_SPEED, b"\x00\x00")
         self._mode = None
-        self._enter_mode(_MODE_WHEEL)
+        self._enter_mode(_scs.MODE_WHEEL)
         estop.on_engage(self.coast)  # torque off: instant, not ramped like brake()
 
     # --- adoption by a DriveBase -------------------------------------------------
@@ -567,19 +563,19 @@ class ST3215Motor(_BusServo, Motor):
     def _encode_goal_speed(self, deg_per_s):
         """The goal-speed register bytes for `deg_per_s` in the user frame (clamped, inverted)."""
         deg_per_s = max(-self.max_dps, min(self.max_dps, deg_per_s)) * self._sign
-        raw = _sign_magnitude(deg_per_s * self.steps_per_dps, 15)
+        raw = _sign_magnitude(deg_per_s * self.steps_per_dps, _scs.SPEED_SIGN_BIT)
         return bytes((raw & 0xFF, raw >> 8))
 
     def _speed_command(self, deg_per_s):
         """Goal-speed bytes for a new wheel speed, after folding in the motion under the old one."""
         self._feedback()
         data = self._encode_goal_speed(deg_per_s)
-        self._cmd_cps = _from_sign_magnitude(_u16(data, 0), 15)
+        self._cmd_cps = _from_sign_magnitude(_u16(data, 0), _scs.SPEED_SIGN_BIT)
         return data
 
     def _set_torque(self, on):
         if self._torque != on:
-            self._write(_REG_TORQUE_ENABLE, b"\x01" if on else b"\x00")
+            self._write(_scs.REG_TORQUE_ENABLE, b"\x01" if on else b"\x00")
             self._torque = on
 
     def _enter_mode(self, mode):
@@ -587,9 +583,9 @@ class ST3215Motor(_BusServo, Motor):
         if self._mode == mode:
             return
         self._checked_feedback()  # fold in motion up to the switch (in step mode: the steps travelled)
-        self._write(_REG_MODE, bytes((mode,)))
+        self._write(_scs.REG_MODE, bytes((mode,)))
         self._mode = mode
-        if mode == _MODE_STEP:
+        if mode == _scs.MODE_STEP:
             self._step_base = self._counts
             self._step_counts = 0
             self._remaining = 0
@@ -605,7 +601,7 @@ class ST3215Motor(_BusServo, Motor):
             return (start_cps + end_cps) * 0.5 * min(dt_s, 0.5)
         accel = self._acc_register() * 100
         if (
-            self._mode == _MODE_WHEEL
+            self._mode == _scs.MODE_WHEEL
             and accel
             and abs(end_cps - self._cmd_cps) <= 0.05 * abs(self._cmd_cps) + 20
         ):
@@ -617,22 +613,22 @@ class ST3215Motor(_BusServo, Motor):
 
     def _feedback(self):
         """Read position, speed and load in one transaction; (speed in counts/s, load in 0.1 %) or None."""
-        data = self._read(_REG_PRESENT_POSITION, 6)
+        data = self._read(_scs.REG_PRESENT_POSITION, 6)
         if data is None:
             return None
         raw = _u16(data, 0)
-        cps = _from_sign_magnitude(_u16(data, 2), 15)
-        load = _from_sign_magnitude(_u16(data, 4), 10)
+        cps = _from_sign_magnitude(_u16(data, 2), _scs.SPEED_SIGN_BIT)
+        load = _from_sign_magnitude(_u16(data, 4), _scs.LOAD_SIGN_BIT)
         now = time.ticks_us()
-        if self._mode == _MODE_STEP:
-            self._remaining = _from_sign_magnitude(raw, 15)
+        if self._mode == _scs.MODE_STEP:
+            self._remaining = _from_sign_magnitude(raw, _scs.POSITION_SIGN_BIT)
             self._counts = self._step_base + self._step_counts - self._remaining
         else:
-            value = _from_sign_magnitude(raw, 15)
+            value = _from_sign_magnitude(raw, _scs.POSITION_SIGN_BIT)
             if self._last_raw is not None:
                 delta = value - self._last_raw
                 expected = self._expected_counts(time.ticks_diff(now, self._last_us) / 1e6, cps)
-                delta += round((expected - delta) / _MULTI_TURN_SPAN) * _MULTI_TURN_SPAN
+                delta += round((expected - delta) / _scs.MULTI_TURN_SPAN) * _scs.MULTI_TURN_SPAN
                 self._counts += delta
             self._last_raw = value
         self._last_us = now
@@ -653,13 +649,13 @@ class ST3215Motor(_BusServo, Motor):
             return self._port.angle(self.slot)
         if self._feedback() is None:
             return None
-        return self._sign * self._counts / _COUNTS_PER_DEG + self._offset_deg
+        return self._sign * self._counts / self._counts_per_deg + self._offset_deg
 
     def reset_angle(self, angle=0):
         if self._port is not None:
             return self._port.reset_angle(self.slot, angle)
         self._checked_feedback()
-        self._offset_deg = angle - self._sign * self._counts / _COUNTS_PER_DEG
+        self._offset_deg = angle - self._sign * self._counts / self._counts_per_deg
 
     def speed(self):
         """Measured shaft speed in deg/s from the present-speed register; None if the servo is silent."""
@@ -699,11 +695,11 @@ class ST3215Motor(_BusServo, Motor):
 
     def _wheel_speed(self, deg_per_s):
         self._move = None
-        self._write(_REG_GOAL_SPEED, self._speed_command(deg_per_s))
+        self._write(_scs.REG_GOAL_SPEED, self._speed_command(deg_per_s))
         self._prepare_wheel()
 
     def _prepare_wheel(self):
-        self._enter_mode(_MODE_WHEEL)
+        self._enter_mode(_scs.MODE_WHEEL)
         self._set_torque(True)
 
     def brake(self):
@@ -718,9 +714,9 @@ class ST3215Motor(_BusServo, Motor):
             return self._port.coast(self.slot)
         self._move = None
         self._set_torque(False)
-        if self._mode != _MODE_WHEEL:
+        if self._mode != _scs.MODE_WHEEL:
             # Step-mode position reads are "steps to go" and mean nothing while free-wheeling.
-            self._enter_mode(_MODE_WHEEL)
+            self._enter_mode(_scs.MODE_WHEEL)
 
     def hold(self):
         """Hold the current shaft angle on the servo's position loop."""
@@ -729,12 +725,12 @@ class ST3215Motor(_BusServo, Motor):
         self._move = None
         # A zero step in step mode: the servo's position loop keeps the shaft where it is, and
         # the multi-turn odometry carries on from the steps-to-go reading.
-        self._enter_mode(_MODE_STEP)
+        self._enter_mode(_scs.MODE_STEP)
         self._set_torque(True)
         self._checked_feedback()
         self._step_base = self._counts
         self._step_counts = 0
-        self._write(_REG_GOAL_POSITION, b"\x00\x00", attempts=1)
+        self._write(_scs.REG_GOAL_POSITION, b"\x00\x00", attempts=1)
 
     def dc(self, duty):
         """Raw duty -100..100 on the servo's open-loop mode: no speed regulation, speed sags with load."""
@@ -743,9 +739,9 @@ class ST3215Motor(_BusServo, Motor):
         estop.check("%s dc()" % type(self).__name__)
         self._move = None
         duty = max(-100, min(100, duty)) * self._sign
-        raw = _sign_magnitude(duty * 10, 10)
-        self._write(_REG_GOAL_TIME, bytes((raw & 0xFF, raw >> 8)))
-        self._enter_mode(_MODE_DUTY)
+        raw = _sign_magnitude(duty * 10, _scs.DUTY_SIGN_BIT)
+        self._write(_scs.REG_GOAL_TIME, bytes((raw & 0xFF, raw >> 8)))
+        self._enter_mode(_scs.MODE_DUTY)
         self._set_torque(True)
 
     def _duty_limit_push(self, limit_pct):
@@ -753,7 +749,7 @@ class ST3215Motor(_BusServo, Motor):
             self._port.set_duty_limit(self.slot, limit_pct)
         else:
             raw = int(round(limit_pct * 10))
-            self._write(_REG_TORQUE_LIMIT, bytes((raw & 0xFF, raw >> 8)))
+            self._write(_scs.REG_TORQUE_LIMIT, bytes((raw & 0xFF, raw >> 8)))
         self._cap_stack.append(self._cap_pct)
         self._cap_pct = limit_pct
 
@@ -763,7 +759,7 @@ class ST3215Motor(_BusServo, Motor):
             self._port.set_duty_limit(self.slot, self._cap_pct)
             return
         raw = int(round(self._cap_pct * 10))
-        self._write(_REG_TORQUE_LIMIT, bytes((raw & 0xFF, raw >> 8)))
+        self._write(_scs.REG_TORQUE_LIMIT, bytes((raw & 0xFF, raw >> 8)))
 
     def run_angle(
         self,
@@ -792,12 +788,12 @@ class ST3215Motor(_BusServo, Motor):
         if speed_dps == 0:
             raise ValueError("run_angle(deg_per_s=0): the move would never finish; give a non-zero speed")
         self._move = None
-        self._enter_mode(_MODE_STEP)
-        raw = _sign_magnitude(speed_dps * self.steps_per_dps, 15)  # a magnitude in step mode
-        self._write(_REG_GOAL_SPEED, bytes((raw & 0xFF, raw >> 8)))
+        self._enter_mode(_scs.MODE_STEP)
+        raw = _sign_magnitude(speed_dps * self.steps_per_dps, _scs.SPEED_SIGN_BIT)  # a magnitude in step mode
+        self._write(_scs.REG_GOAL_SPEED, bytes((raw & 0xFF, raw >> 8)))
         self._set_torque(True)
-        counts = int(round(target_angle * _COUNTS_PER_DEG)) * self._sign
-        tolerance = max(1, int(tolerance_deg * _COUNTS_PER_DEG))
+        counts = int(round(target_angle * self._counts_per_deg)) * self._sign
+        tolerance = max(1, int(tolerance_deg * self._counts_per_deg))
         direction = 1 if target_angle >= 0 else -1
         self._move = _StepMove(counts, name, speed_dps * direction, tolerance)
         self._issue_step()
@@ -808,16 +804,17 @@ class ST3215Motor(_BusServo, Motor):
 
     def _issue_step(self):
         move = self._move
-        step = max(-_MAX_STEP_COUNTS, min(_MAX_STEP_COUNTS, move.counts_left))
+        longest = _MAX_STEP_TURNS * _scs.COUNTS_PER_REV
+        step = max(-longest, min(longest, move.counts_left))
         move.counts_left -= step
         self._step_base = self._counts
         self._step_counts = step
         self._remaining = step
         move.best_remaining = abs(step)
         move.best_ms = time.ticks_ms()
-        raw = _sign_magnitude(step, 15)
+        raw = _sign_magnitude(step, _scs.POSITION_SIGN_BIT)
         # Never retried: a relative step whose acknowledgement got lost may already be running.
-        self._write(_REG_GOAL_POSITION, bytes((raw & 0xFF, raw >> 8)), attempts=1)
+        self._write(_scs.REG_GOAL_POSITION, bytes((raw & 0xFF, raw >> 8)), attempts=1)
 
     def done(self):
         """True when no run_angle(wait=False) move is in flight; polling it advances a chained move."""
@@ -850,7 +847,7 @@ class ST3215Motor(_BusServo, Motor):
 
     def _stalled_move(self, move):
         self._move = None
-        short_deg = (move.counts_left + self._remaining) / _COUNTS_PER_DEG
+        short_deg = (move.counts_left + self._remaining) / self._counts_per_deg
         if self.raise_on_stall:
             self.coast()
             raise RuntimeError(
@@ -897,7 +894,7 @@ class SyncServoGroup:
             items.append((servo.servo_id, servo._speed_command(speeds_dps[i])))
         # Speeds first: servos already spinning change at this packet; any that still have to
         # be switched into wheel mode start on the new speed rather than a stale one.
-        self.bus.sync_write(_REG_GOAL_SPEED, 2, items)
+        self.bus.sync_write(_scs.REG_GOAL_SPEED, 2, items)
         for servo in self.servos:
             servo._move = None
             servo._prepare_wheel()

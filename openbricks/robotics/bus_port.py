@@ -143,7 +143,7 @@ class BusPort:
             kwargs["max_speed_dps"] = motor.max_dps
             if motor.accel_dps2 > 0:  # 0 is the servo's "no ramp"; the native default ramps steeply
                 kwargs["accel_dps2"] = motor.accel_dps2
-            servo = _native.Servo(counts_per_rev=4096, **kwargs)
+            servo = _native.Servo(counts_per_rev=_native.scs.COUNTS_PER_REV, **kwargs)
             if slot in self._limits:
                 servo.set_duty_limit(self._limits[slot])
             self._servos[slot] = servo
