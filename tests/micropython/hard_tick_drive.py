@@ -15,22 +15,14 @@ import sys
 
 sys.path[:0] = [""]
 
-import time  # noqa: E402
-
 import _openbricks_bench  # noqa: E402
+
+from tests.micropython.hard_tick_hub import busy, install_machine  # noqa: E402
 
 bench = _openbricks_bench.BenchBus((1, 2))
 
 
-class _Machine:
-    """The hub's `machine` as far as the servo bus goes: its UART is the in-memory wire."""
-
-    @staticmethod
-    def UART(uart_id, **_wiring):
-        return bench
-
-
-sys.modules["machine"] = _Machine
+install_machine(bench)
 
 import _openbricks_native  # noqa: E402
 
@@ -39,15 +31,6 @@ from openbricks.robotics import DriveBase  # noqa: E402
 
 WHEEL_MM = 56.0
 TRACK_MM = 120.0
-
-
-def busy(ms):
-    """Spin in Python for `ms` without sleeping or touching the runtime; returns loop rounds."""
-    start = time.ticks_ms()
-    rounds = 0
-    while time.ticks_diff(time.ticks_ms(), start) < ms:
-        rounds += 1
-    return rounds
 
 
 def wheel_mm(servo_id, start_deg):

@@ -22,10 +22,10 @@ SCRIPT = Path(__file__).resolve().parent / "hard_tick_drive.py"
 pytestmark = pytest.mark.micropython
 
 
-@pytest.fixture(scope="module")
-def measured(unix_micropython):  # noqa: F811 - the fixture imported above
+def run_script(interpreter, script):
+    """Run a hard-tick script on the unix MicroPython; what its `@result {json}` line measured."""
     proc = subprocess.run(
-        [str(unix_micropython), "-X", "heapsize=8M", str(SCRIPT)],
+        [str(interpreter), "-X", "heapsize=8M", str(script)],
         cwd=REPO,
         capture_output=True,
         text=True,
@@ -35,6 +35,11 @@ def measured(unix_micropython):  # noqa: F811 - the fixture imported above
     output = f"exit {proc.returncode}\n{proc.stdout[-3000:]}{proc.stderr[-3000:]}"
     assert proc.returncode == 0 and lines, output
     return json.loads(lines[-1][len("@result ") :])
+
+
+@pytest.fixture(scope="module")
+def measured(unix_micropython):  # noqa: F811 - the fixture imported above
+    return run_script(unix_micropython, SCRIPT)
 
 
 def test_a_straight_lands_while_python_spins_without_sleeping(measured):

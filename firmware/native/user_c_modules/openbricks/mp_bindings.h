@@ -106,6 +106,28 @@ extern const mp_obj_type_t ob_mp_native_uart_type;
 /* The ob_uart_t of a native UART object, or NULL for any other object. */
 const ob_uart_t *ob_mp_native_uart_get(mp_obj_t obj);
 
+/* Native sensor links, the same way: a counter a PCNTEncoder reads (pcnt.h) and an SPI link an
+ * ICM45686 reads (spi.h). On the hub they are the peripherals; in the unix port's tests, emulated
+ * hardware in C (_openbricks_bench). A sensor on a native link is polled by the hard tick. */
+#include "pcnt.h"
+#include "spi.h"
+typedef struct {
+    mp_obj_base_t base;
+    ob_pcnt_t pcnt;
+} ob_mp_native_counter_t;
+
+typedef struct {
+    mp_obj_base_t base;
+    ob_spi_t spi;
+} ob_mp_native_spi_t;
+
+extern const mp_obj_type_t ob_mp_native_counter_type;
+extern const mp_obj_type_t ob_mp_native_spi_type;
+
+/* The ob_pcnt_t / ob_spi_t of a native counter / SPI link, or NULL for any other object. */
+const ob_pcnt_t *ob_mp_native_counter_get(mp_obj_t obj);
+const ob_spi_t *ob_mp_native_spi_get(mp_obj_t obj);
+
 /* ---- The hard tick and the motor lock (mp_hard_tick.c, mp_hard_lock.c). ---- */
 
 /* Start the 1 kHz hard tick (idempotent); raises OSError when the platform timer cannot start. */

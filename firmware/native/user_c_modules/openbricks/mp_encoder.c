@@ -4,8 +4,10 @@
  * On the hub, PCNTEncoder(counts_per_rev, pin_a=, pin_b=, unit=, filter=)
  * counts the pins on a PCNT unit (mp_pcnt_esp32.c) and the hard tick reads
  * the unit every millisecond, so the 16-bit counter is unwrapped whatever
- * Python is doing. Elsewhere (the unix port) there is no PCNT: readings come
- * through sample(raw), as in the host tests.
+ * Python is doing. counter= takes any native counter instead (the unix
+ * port's tests: an emulated PCNT unit in C, read by the hard tick the same
+ * way). Without either, readings come through sample(raw), as in the host
+ * tests.
  */
 #include "encoder.h"
 #include "mp_bindings.h"
@@ -14,18 +16,17 @@ typedef struct {
     mp_obj_base_t base;
     ob_encoder_t enc;
     bool closed;
-    bool hardware; /* counting a PCNT unit, polled by the hard tick */
+    bool hardware; /* counting a PCNT unit or a native counter, polled by the hard tick */
+    mp_obj_t counter; /* the native counter object read (kept alive), or MP_OBJ_NULL */
 } pcnt_encoder_obj_t;
 
-#if defined(ESP_PLATFORM)
 static void poll(void *ctx) {
     ob_encoder_poll(ctx);
 }
-#endif
 
 static mp_obj_t pcnt_encoder_make_new(const mp_obj_type_t *type, size_t n_args, size_t n_kw,
                                       const mp_obj_t *all_args) {
-    enum { ARG_counts_per_rev, ARG_invert, ARG_modulus, ARG_pin_a, ARG_pin_b, ARG_unit, ARG_filter };
+    enum { ARG_counts_per_rev, ARG_invert, ARG_modulus, ARG_pin_a, ARG_pin_b, ARG_unit, ARG_filter, ARG_counter };
     static const mp_arg_t allowed[] = {
         {MP_QSTR_counts_per_rev, MP_ARG_REQUIRED | MP_ARG_OBJ, {.u_obj = MP_OBJ_NULL}},
         {MP_QSTR_invert, MP_ARG_KW_ONLY | MP_ARG_BOOL, {.u_bool = false}},
@@ -34,6 +35,7 @@ static mp_obj_t pcnt_encoder_make_new(const mp_obj_type_t *type, size_t n_args, 
         {MP_QSTR_pin_b, MP_ARG_KW_ONLY | MP_ARG_OBJ, {.u_obj = mp_const_none}},
         {MP_QSTR_unit, MP_ARG_KW_ONLY | MP_ARG_INT, {.u_int = 0}},
         {MP_QSTR_filter, MP_ARG_KW_ONLY | MP_ARG_INT, {.u_int = OB_PCNT_FILTER_MAX_CYCLES}},
+        {MP_QSTR_counter, MP_ARG_KW_ONLY | MP_ARG_OBJ, {.u_obj = mp_const_none}},
     };
     mp_arg_val_t args[MP_ARRAY_SIZE(allowed)];
     mp_arg_parse_all_kw_array(n_args, n_kw, all_args, MP_ARRAY_SIZE(allowed), allowed, args);
@@ -58,6 +60,18 @@ static mp_obj_t pcnt_encoder_make_new(const mp_obj_type_t *type, size_t n_args, 
     }
     self->closed = false;
     self->hardware = false;
+    self->counter = MP_OBJ_NULL;
+    if (args[ARG_counter].u_obj != mp_const_none) {
+        const ob_pcnt_t *link = ob_mp_native_counter_get(args[ARG_counter].u_obj);
+        if (link == NULL || pins) {
+            mp_raise_TypeError(MP_ERROR_TEXT("PCNTEncoder(): counter= takes a native counter (not with pin_a/pin_b)"));
+        }
+        self->counter = args[ARG_counter].u_obj;
+        ob_encoder_init(&self->enc, &cfg, link);
+        ob_encoder_poll(&self->enc); /* where counting starts */
+        self->hardware = true;
+        ob_mp_hard_tick_poll(MP_OBJ_FROM_PTR(self), poll, &self->enc);
+    }
     #if defined(ESP_PLATFORM)
     if (pins) {
         if (args[ARG_pin_a].u_obj == mp_const_none || args[ARG_pin_b].u_obj == mp_const_none) {
@@ -148,8 +162,11 @@ static mp_obj_t pcnt_encoder_close(mp_obj_t self_in) {
     if (self->hardware) {
         ob_mp_hard_tick_unpoll(&self->enc);
         #if defined(ESP_PLATFORM)
-        ob_mp_pcnt_esp32_close(&self->enc.pcnt);
+        if (self->counter == MP_OBJ_NULL) {
+            ob_mp_pcnt_esp32_close(&self->enc.pcnt);
+        }
         #endif
+        self->counter = MP_OBJ_NULL;
         self->hardware = false;
     }
     self->closed = true;

@@ -6,7 +6,9 @@
  * the heading integrates whatever Python is doing; a DriveBase given this
  * object as heading= reads it in C and stays on the hard tick. Elsewhere
  * (the unix port) the chip is a model behind a Python transfer(bytes) ->
- * bytes, sampled through sample(now_us), as in the host tests.
+ * bytes, sampled through sample(now_us), as in the host tests; or, given a
+ * native SPI link as transfer= (the unix port's tests: an emulated chip in
+ * C), polled by the hard tick exactly as on the hub.
  */
 #include <math.h>
 #include <string.h>
@@ -21,7 +23,7 @@ typedef struct {
     mp_obj_t transfer; /* Python transfer(bytes) -> bytes, or MP_OBJ_NULL on the hub's SPI */
     mp_obj_t delay_ms;
     mp_obj_t error;    /* first exception of a transfer or delay callable, raised when the call ends */
-    bool hardware;     /* on the hub's SPI, sampled by the hard tick */
+    bool hardware;     /* on the hub's SPI or a native link, sampled by the hard tick */
 } icm45686_obj_t;
 
 static void stash(icm45686_obj_t *self, void *exc) {
@@ -72,11 +74,9 @@ static void py_delay_ms(void *ctx, uint32_t ms) {
     }
 }
 
-#if defined(ESP_PLATFORM)
 static void poll(void *ctx) {
     ob_icm45686_sample(ctx, ob_hard_timer_now_us());
 }
-#endif
 
 static mp_obj_t icm45686_make_new(const mp_obj_type_t *type, size_t n_args, size_t n_kw, const mp_obj_t *all_args) {
     enum { ARG_transfer, ARG_delay_ms, ARG_scale, ARG_sck, ARG_mosi, ARG_miso, ARG_cs, ARG_hz, ARG_mode, ARG_spi_id };
@@ -106,7 +106,8 @@ static mp_obj_t icm45686_make_new(const mp_obj_type_t *type, size_t n_args, size
     #endif
     mp_obj_t transfer = args[ARG_transfer].u_obj;
     mp_obj_t delay_ms = args[ARG_delay_ms].u_obj;
-    if (!pins && !mp_obj_is_callable(transfer)) {
+    const ob_spi_t *link = ob_mp_native_spi_get(transfer);
+    if (!pins && link == NULL && !mp_obj_is_callable(transfer)) {
         mp_raise_msg_varg(&mp_type_TypeError,
                           MP_ERROR_TEXT("ICM45686(): transfer must be a callable(bytes) -> bytes, got %s"),
                           mp_obj_get_type_str(transfer));
@@ -131,6 +132,10 @@ static mp_obj_t icm45686_make_new(const mp_obj_type_t *type, size_t n_args, size
     self->error = MP_OBJ_NULL;
     self->hardware = false;
     ob_spi_t spi = {py_transfer, py_delay_ms, self};
+    if (link != NULL) {
+        spi = *link; /* transfer keeps the link object alive */
+        self->hardware = true;
+    }
     #if defined(ESP_PLATFORM)
     if (pins) {
         for (int i = ARG_sck; i <= ARG_cs; i++) {
@@ -152,11 +157,11 @@ static mp_obj_t icm45686_make_new(const mp_obj_type_t *type, size_t n_args, size
     ob_icm45686_error_t error = ob_icm45686_configure(&self->imu);
     if (error != OB_ICM45686_OK) {
         #if defined(ESP_PLATFORM)
-        if (self->hardware) {
+        if (self->hardware && link == NULL) {
             ob_mp_spi_esp32_close(&self->imu.spi);
-            self->hardware = false;
         }
         #endif
+        self->hardware = false;
     }
     raise_stashed(self);
     if (error == OB_ICM45686_NO_CHIP) {
@@ -177,11 +182,9 @@ static mp_obj_t icm45686_make_new(const mp_obj_type_t *type, size_t n_args, size
     if (error != OB_ICM45686_OK) {
         mp_raise_msg_varg(&mp_type_OSError, MP_ERROR_TEXT("ICM45686: %s"), ob_icm45686_strerror(error));
     }
-    #if defined(ESP_PLATFORM)
     if (self->hardware) {
         ob_mp_hard_tick_poll(MP_OBJ_FROM_PTR(self), poll, &self->imu);
     }
-    #endif
     return MP_OBJ_FROM_PTR(self);
 }
 
@@ -277,7 +280,9 @@ static mp_obj_t icm45686_close(mp_obj_t self_in) {
     if (self->hardware) {
         ob_mp_hard_tick_unpoll(&self->imu);
         #if defined(ESP_PLATFORM)
-        ob_mp_spi_esp32_close(&self->imu.spi);
+        if (ob_mp_native_spi_get(self->transfer) == NULL) {
+            ob_mp_spi_esp32_close(&self->imu.spi);
+        }
         #endif
         self->hardware = false;
     }

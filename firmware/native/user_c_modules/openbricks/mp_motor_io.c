@@ -1,7 +1,7 @@
 /*
- * MotorIO and the native UART base: how a binding object hands a controller
- * or the serial-bus engine C functions that never call Python (host: the
- * MotorIO of py_capi.c / py_motor_io.h).
+ * MotorIO and the native UART, counter and SPI bases: how a binding object
+ * hands a controller, the serial-bus engine or a sensor core C functions that
+ * never call Python (host: the MotorIO of py_capi.c / py_motor_io.h).
  *
  * A provider's object struct starts with ob_mp_motor_io_t (or
  * ob_mp_native_uart_t) and its type names ob_mp_motor_io_type (or
@@ -24,6 +24,12 @@ static mp_obj_t native_base(mp_obj_t obj, const mp_obj_type_t *base) {
     return obj;
 }
 
+/* The provider part of obj when it derives from `base`, or NULL. */
+static void *provider_part(mp_obj_t obj, const mp_obj_type_t *base) {
+    mp_obj_t part = native_base(obj, base);
+    return part == MP_OBJ_NULL ? NULL : MP_OBJ_TO_PTR(part);
+}
+
 MP_DEFINE_CONST_OBJ_TYPE(
     ob_mp_motor_io_type,
     MP_QSTR_MotorIO,
@@ -31,15 +37,12 @@ MP_DEFINE_CONST_OBJ_TYPE(
     );
 
 bool ob_mp_motor_io_get(mp_obj_t obj, ob_motor_io_t *io) {
-    mp_obj_t base = native_base(obj, &ob_mp_motor_io_type);
-    if (base == MP_OBJ_NULL) {
+    const ob_mp_motor_io_t *motor = provider_part(obj, &ob_mp_motor_io_type);
+    if (motor == NULL || motor->io.read_angle == NULL || motor->io.write_duty == NULL ||
+        motor->io.write_coast == NULL) {
         return false;
     }
-    const ob_mp_motor_io_t *provider = MP_OBJ_TO_PTR(base);
-    if (provider->io.read_angle == NULL || provider->io.write_duty == NULL || provider->io.write_coast == NULL) {
-        return false;
-    }
-    *io = provider->io;
+    *io = motor->io;
     return true;
 }
 
@@ -50,10 +53,28 @@ MP_DEFINE_CONST_OBJ_TYPE(
     );
 
 const ob_uart_t *ob_mp_native_uart_get(mp_obj_t obj) {
-    mp_obj_t base = native_base(obj, &ob_mp_native_uart_type);
-    if (base == MP_OBJ_NULL) {
-        return NULL;
-    }
-    const ob_mp_native_uart_t *wire = MP_OBJ_TO_PTR(base);
-    return wire->uart.write != NULL ? &wire->uart : NULL;
+    const ob_mp_native_uart_t *wire = provider_part(obj, &ob_mp_native_uart_type);
+    return wire != NULL && wire->uart.write != NULL ? &wire->uart : NULL;
+}
+
+MP_DEFINE_CONST_OBJ_TYPE(
+    ob_mp_native_counter_type,
+    MP_QSTR_NativeCounter,
+    MP_TYPE_FLAG_NONE
+    );
+
+const ob_pcnt_t *ob_mp_native_counter_get(mp_obj_t obj) {
+    const ob_mp_native_counter_t *counter = provider_part(obj, &ob_mp_native_counter_type);
+    return counter != NULL && counter->pcnt.read != NULL ? &counter->pcnt : NULL;
+}
+
+MP_DEFINE_CONST_OBJ_TYPE(
+    ob_mp_native_spi_type,
+    MP_QSTR_NativeSPI,
+    MP_TYPE_FLAG_NONE
+    );
+
+const ob_spi_t *ob_mp_native_spi_get(mp_obj_t obj) {
+    const ob_mp_native_spi_t *link = provider_part(obj, &ob_mp_native_spi_type);
+    return link != NULL && link->spi.transfer != NULL ? &link->spi : NULL;
 }

@@ -11,11 +11,14 @@
  * the hard tick runs it from its own thread while the interpreter is busy.
  * Its methods run under the motor lock, as the engine's do. angle_deg(id)
  * is the true shaft angle; set_silent(id, True) unplugs a servo.
+ * BenchEncoder and BenchIMU (mod_bench_sensors.c) are emulated sensors on
+ * native links, for the hard tick to poll.
  */
 #include <string.h>
 
 #include "bench_servos.h"
 #include "hard_timer.h"
+#include "mod_bench.h"
 #include "mp_bindings.h"
 
 typedef struct {
@@ -155,8 +158,8 @@ static void bench_bus_attr(mp_obj_t self_in, qstr attr, mp_obj_t *dest) {
     ob_mp_locked_attr(self_in, attr, dest, &bench_bus_locals); /* the hard tick may be using the wire */
 }
 
-static MP_DEFINE_CONST_OBJ_TYPE(
-    bench_bus_type,
+MP_DEFINE_CONST_OBJ_TYPE(
+    ob_mp_bench_bus_type,
     MP_QSTR_BenchBus,
     MP_TYPE_FLAG_NONE,
     make_new, bench_bus_make_new,
@@ -167,9 +170,15 @@ static MP_DEFINE_CONST_OBJ_TYPE(
 
 static const mp_rom_map_elem_t bench_globals_table[] = {
     {MP_ROM_QSTR(MP_QSTR___name__), MP_ROM_QSTR(MP_QSTR__openbricks_bench)},
-    {MP_ROM_QSTR(MP_QSTR_BenchBus), MP_ROM_PTR(&bench_bus_type)},
+    {MP_ROM_QSTR(MP_QSTR_BenchBus), MP_ROM_PTR(&ob_mp_bench_bus_type)},
+    {MP_ROM_QSTR(MP_QSTR_BenchEncoder), MP_ROM_PTR(&ob_mp_bench_encoder_type)},
+    {MP_ROM_QSTR(MP_QSTR_BenchIMU), MP_ROM_PTR(&ob_mp_bench_imu_type)},
 };
 static MP_DEFINE_CONST_DICT(bench_globals, bench_globals_table);
+
+ob_bench_bus_t *ob_bench_bus_get(mp_obj_t obj) {
+    return mp_obj_is_type(obj, &ob_mp_bench_bus_type) ? &((bench_bus_obj_t *)MP_OBJ_TO_PTR(obj))->bus : NULL;
+}
 
 const mp_obj_module_t ob_mp_bench_module = {
     .base = {&mp_type_module},
