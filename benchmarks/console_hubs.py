@@ -35,6 +35,7 @@ import time
 from pathlib import Path
 
 from benchmarks import Row
+from benchmarks._proc import children, load_average, proc_stat
 
 REPO = Path(__file__).resolve().parent.parent
 if str(REPO) not in sys.path:
@@ -226,9 +227,9 @@ def _latency(console: ConsoleProcess) -> dict:
 def latency_rows() -> list[Row]:
     console = ConsoleProcess(HUBS)
     try:
-        cpu_before, wall_before = _proc_stat(console.process.pid)[0], time.monotonic()
+        cpu_before, wall_before = proc_stat(console.process.pid)[0], time.monotonic()
         figures = _latency(console)
-        daemon_cpu = (_proc_stat(console.process.pid)[0] - cpu_before) / (time.monotonic() - wall_before)
+        daemon_cpu = (proc_stat(console.process.pid)[0] - cpu_before) / (time.monotonic() - wall_before)
     finally:
         console.stop()
     setup = f"{figures['hubs']} hubs x {LINES_PER_S} lines/s x {DURATION_S} s, {CLIENTS} clients"
@@ -237,7 +238,9 @@ def latency_rows() -> list[Row]:
         values = figures[key]
         rows.append(Row(f"{what}, p50", _percentile(values, 0.5), "ms", setup))
         rows.append(Row(f"{what}, p99", _percentile(values, 0.99), "ms", "target < 50 ms"))
-    rows.append(Row("daemon CPU while streaming", 100 * daemon_cpu, "% of a core", f"load average {_load()}"))
+    rows.append(
+        Row("daemon CPU while streaming", 100 * daemon_cpu, "% of a core", f"load average {load_average()}")
+    )
     rows.append(
         Row(
             "lines lost (all clients)",
@@ -347,35 +350,15 @@ def upload_rows() -> list[Row]:
 # -- 3. idle cost -----------------------------------------------------------------------------------
 
 
-def _proc_stat(pid: int) -> tuple[float, int]:
-    """(CPU seconds used, resident bytes) of process `pid`."""
-    fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
-    ticks = os.sysconf("SC_CLK_TCK")
-    cpu = (int(fields[11]) + int(fields[12])) / ticks
-    rss = int(fields[21]) * os.sysconf("SC_PAGE_SIZE")
-    return cpu, rss
-
-
-def _load() -> str:
-    return Path("/proc/loadavg").read_text().split()[0]
-
-
-def _children(pid: int) -> list[int]:
-    try:
-        return [int(p) for p in Path(f"/proc/{pid}/task/{pid}/children").read_text().split()]
-    except OSError:
-        return []
-
-
 def idle_rows() -> list[Row]:
     console = ConsoleProcess(IDLE_HUBS)
     try:
         time.sleep(3)  # the connects' log pulls and hand-backs are done
         pid = console.process.pid
-        kids = _children(pid)
-        before = {p: _proc_stat(p) for p in [pid, *kids]}
+        kids = children(pid)
+        before = {p: proc_stat(p) for p in [pid, *kids]}
         time.sleep(IDLE_S)
-        after = {p: _proc_stat(p) for p in [pid, *kids]}
+        after = {p: proc_stat(p) for p in [pid, *kids]}
     finally:
         console.stop()
     daemon_cpu = 100 * (after[pid][0] - before[pid][0]) / IDLE_S

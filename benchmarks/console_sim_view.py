@@ -19,7 +19,6 @@ beside the run, not in it. Each count is measured ROUNDS times, interleaved, and
 from __future__ import annotations
 
 import json
-import os
 import statistics
 import subprocess
 import sys
@@ -33,6 +32,7 @@ import httpx
 import uvicorn
 
 from benchmarks import Row
+from benchmarks._proc import proc_stat
 
 REPO = Path(__file__).resolve().parent.parent
 VIEWERS = (0, 1, 5, 20)
@@ -85,15 +85,10 @@ def _connections(port: int) -> int:
     return count
 
 
-def _cpu_s(pid: int) -> float:
-    fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
-    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
-
-
 def _sample(client: httpx.Client, run_id: str, pid: int) -> tuple[float, int, float, float]:
     """(wall s, simulated ms, the run's CPU s, this daemon's CPU s), now."""
     sim_ms = client.get(f"/api/sim/runs/{run_id}").json()["sim_ms"]
-    return time.monotonic(), sim_ms, _cpu_s(pid), time.process_time()
+    return time.monotonic(), sim_ms, proc_stat(pid)[0], time.process_time()
 
 
 def _measure(daemon: _Daemon, client: httpx.Client, viewers: int) -> dict:
