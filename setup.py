@@ -11,6 +11,8 @@ from setuptools import Extension, find_packages, setup
 
 PACKAGE_FOLDERS = {"openbricks": "openbricks", "openbricks_server": "server", "openbricks_sim": "sim"}
 NATIVE = "firmware/native"
+# Emulated servos in C, for the simulator and the unix port's tests (not built into a hub).
+EMULATION = f"{NATIVE}/user_c_modules/openbricks_bench"
 
 
 def packages() -> list[str]:
@@ -43,13 +45,15 @@ setup(
         # DIR on PYTHONPATH. It needs no MuJoCo headers: it reaches mjData through the Python bindings.
         Extension(
             "openbricks_mjcontrol",
-            # The emulated servo bus parses and answers packets with the firmware's own codec.
-            sources=[*sorted(glob("sim/native/*.c")), f"{NATIVE}/scs.c"],
-            include_dirs=[NATIVE, f"{NATIVE}/bindings/cpython", "sim/native"],
+            # The emulated servo bus is the servo emulation the unix port's bench bus runs too, and
+            # parses and answers packets with the firmware's own codec.
+            sources=[*sorted(glob("sim/native/*.c")), f"{EMULATION}/emulated_servo.c", f"{NATIVE}/scs.c"],
+            include_dirs=[NATIVE, f"{NATIVE}/bindings/cpython", EMULATION, "sim/native"],
             depends=[
                 f"{NATIVE}/ob_types.h",
                 f"{NATIVE}/scs.h",
                 f"{NATIVE}/uart.h",
+                f"{EMULATION}/emulated_servo.h",
                 *sorted(glob("sim/native/*.h")),
                 *sorted(glob(f"{NATIVE}/bindings/cpython/py_*.h")),
             ],

@@ -9,15 +9,14 @@
  * deadlines and bus budget run on simulated time exactly as on a hub; a
  * reply that would land after the reader's deadline is lost, as on a bus.
  *
- * Behind the wire are the servos a DriveBase adopted: each one an ST-3032's
- * firmware in open-loop duty mode over a simulated wheel (its WheelIO in the
- * servo's shaft frame). They answer PING, the 6-byte feedback READ (present
- * position as the multi-turn sign-magnitude window, speed, load), WRITE and
- * SYNC WRITE of torque enable, mode, the duty (goal time) and, for
- * drive="wheel", the goal speed register (wheel mode: the servo's own speed
- * loop, modelled as feed-forward plus a proportional term). A
- * servo can be made silent (an unplugged cable). Servos not adopted are
- * answered by the Python register emulation (sim/serial_bus.py) instead,
+ * Behind the wire are the servos a DriveBase adopted: the shared servo
+ * firmware emulation (emulated_servo.c: register file, PING, READ, WRITE,
+ * SYNC WRITE), each servo's shaft a simulated wheel (its WheelIO in the
+ * servo's shaft frame). In open-loop duty mode the goal time register is the
+ * wheel's duty; in wheel mode (drive="wheel") the goal speed register feeds
+ * the servo's own speed loop, modelled as feed-forward plus a proportional
+ * term. A servo can be made silent (an unplugged cable). Servos not adopted
+ * are answered by the Python register emulation (sim/serial_bus.py) instead,
  * through the shim's machine.UART; adoption moves a servo onto this wire.
  *
  * SerialBus(wire.uart()) runs the engine over it with no Python call per tick.
@@ -25,30 +24,18 @@
 #include <math.h>
 #include <string.h>
 
+#include "emulated_servo.h"
 #include "mjcontrol.h"
 #include "scs.h"
 #include "uart.h"
 
-#define MAX_SERVOS 8
 #define COUNTS_PER_REV ((double)OB_SCS_COUNTS_PER_REV)
-#define MULTI_TURN_SPAN ((int32_t)OB_SCS_MULTI_TURN_SPAN)
 /* Wheel mode (drive="wheel"): the servo's own speed loop, feed-forward over its no-load speed
  * plus a proportional term, updated with every packet the engine sends (each tick). */
 #define WHEEL_NO_LOAD_DPS 888.0
 #define WHEEL_KP_PCT_PER_DPS 0.3
 /* An ST-3032 starts its reply this long after the request's last byte (firmware latency). */
 #define DEFAULT_RETURN_DELAY_US 20u
-
-typedef struct {
-    int used;
-    uint8_t id;
-    int silent;
-    WheelIOObject *wheel; /* strong reference; servo shaft frame */
-    uint8_t mode;
-    int torque_on;
-    uint16_t duty_raw; /* goal time register: 0.1 %, sign in bit 10 */
-    uint16_t speed_raw; /* goal speed register: steps/s, sign in bit 15 */
-} servo_t;
 
 typedef struct {
     PyObject_HEAD
@@ -58,22 +45,11 @@ typedef struct {
     uint32_t return_delay_us;
     uint64_t clock_us;
     uint64_t line_free_us;
-    uint8_t reply[OB_SCS_MAX_FRAME];
-    size_t reply_len;
+    ob_emu_bus_t bus;
+    WheelIOObject *wheels[OB_EMU_MAX_SERVOS]; /* strong references, by servo index; servo shaft frame */
     uint64_t reply_done_us; /* when the last reply byte is in */
-    servo_t servos[MAX_SERVOS];
-    uint64_t line_busy_us; /* line time used so far, requests and replies */
-    unsigned long packets;
+    uint64_t line_busy_us;  /* line time used so far, requests and replies */
 } ServoWireObject;
-
-static servo_t *find(ServoWireObject *self, uint8_t id) {
-    for (int i = 0; i < MAX_SERVOS; i++) {
-        if (self->servos[i].used && self->servos[i].id == id) {
-            return &self->servos[i];
-        }
-    }
-    return NULL;
-}
 
 static uint64_t wire_now(ServoWireObject *self) {
     uint64_t physics_us = self->controller->now_ms * 1000u;
@@ -83,20 +59,23 @@ static uint64_t wire_now(ServoWireObject *self) {
     return self->clock_us;
 }
 
-/* ---- One servo's firmware (duty mode) ---- */
+/* ---- Each servo's shaft: a simulated wheel ---- */
 
-static void apply(servo_t *servo) {
-    const ob_motor_io_t *io = &servo->wheel->base.io;
-    if (!servo->torque_on) {
+/* Drive the wheel as the mode, torque and goal registers ask. */
+static void apply(ServoWireObject *self, int index) {
+    const uint8_t *regs = self->bus.servos[index].regs;
+    const WheelIOObject *wheel = self->wheels[index];
+    const ob_motor_io_t *io = &wheel->base.io;
+    if (regs[OB_SCS_REG_TORQUE_ENABLE] == 0u) {
         io->write_coast(io->ctx);
         return;
     }
     float duty = 0.0f;
-    if (servo->mode == OB_SCS_MODE_DUTY) {
-        duty = (float)ob_scs_sm_decode(servo->duty_raw, OB_SCS_DUTY_SIGN_BIT) / 10.0f;
-    } else if (servo->mode == OB_SCS_MODE_WHEEL) {
-        const WheelIOObject *wheel = servo->wheel;
-        double goal_dps = ob_scs_sm_decode(servo->speed_raw, OB_SCS_SPEED_SIGN_BIT) * (360.0 / COUNTS_PER_REV);
+    if (regs[OB_SCS_REG_MODE] == OB_SCS_MODE_DUTY) {
+        duty = (float)ob_scs_sm_decode(ob_scs_get_u16(&regs[OB_SCS_REG_GOAL_TIME]), OB_SCS_DUTY_SIGN_BIT) / 10.0f;
+    } else if (regs[OB_SCS_REG_MODE] == OB_SCS_MODE_WHEEL) {
+        uint16_t raw = ob_scs_get_u16(&regs[OB_SCS_REG_GOAL_SPEED]);
+        double goal_dps = ob_scs_sm_decode(raw, OB_SCS_SPEED_SIGN_BIT) * (360.0 / COUNTS_PER_REV);
         double speed_dps = wheel->sign * *wheel->wheel->qvel * RAD_TO_DEG;
         double pct = 100.0 * goal_dps / WHEEL_NO_LOAD_DPS + WHEEL_KP_PCT_PER_DPS * (goal_dps - speed_dps);
         duty = (float)(pct > 100.0 ? 100.0 : pct < -100.0 ? -100.0 : pct);
@@ -104,87 +83,19 @@ static void apply(servo_t *servo) {
     io->write_duty(io->ctx, duty);
 }
 
-static void write_registers(servo_t *servo, uint8_t address, const uint8_t *data, size_t n) {
-    int touched = 0;
-    for (size_t i = 0; i < n; i++) {
-        unsigned reg = address + (unsigned)i;
-        if (reg == OB_SCS_REG_MODE) {
-            servo->mode = data[i];
-            touched = 1;
-        } else if (reg == OB_SCS_REG_TORQUE_ENABLE) {
-            servo->torque_on = data[i] != 0;
-            touched = 1;
-        } else if (reg == OB_SCS_REG_GOAL_TIME) {
-            servo->duty_raw = (uint16_t)((servo->duty_raw & 0xFF00u) | data[i]);
-            touched = 1;
-        } else if (reg == OB_SCS_REG_GOAL_TIME + 1u) {
-            servo->duty_raw = (uint16_t)((servo->duty_raw & 0x00FFu) | ((unsigned)data[i] << 8));
-            touched = 1;
-        } else if (reg == OB_SCS_REG_GOAL_SPEED) {
-            servo->speed_raw = (uint16_t)((servo->speed_raw & 0xFF00u) | data[i]);
-            touched = 1;
-        } else if (reg == OB_SCS_REG_GOAL_SPEED + 1u) {
-            servo->speed_raw = (uint16_t)((servo->speed_raw & 0x00FFu) | ((unsigned)data[i] << 8));
-            touched = 1;
-        }
-    }
-    if (touched) {
-        apply(servo);
+static void shaft_written(void *ctx, int index, uint8_t address, size_t n) {
+    if (ob_emu_touched(address, n, OB_SCS_REG_MODE) || ob_emu_touched(address, n, OB_SCS_REG_TORQUE_ENABLE) ||
+        ob_emu_touched(address, n, OB_SCS_REG_GOAL_TIME) || ob_emu_touched(address, n, OB_SCS_REG_GOAL_TIME + 1u) ||
+        ob_emu_touched(address, n, OB_SCS_REG_GOAL_SPEED) || ob_emu_touched(address, n, OB_SCS_REG_GOAL_SPEED + 1u)) {
+        apply(ctx, index);
     }
 }
 
-static void feedback(const servo_t *servo, uint8_t *out) {
-    const WheelIOObject *io = servo->wheel;
-    double counts = nearbyint(io->sign * *io->wheel->qpos * (COUNTS_PER_REV / (2.0 * 3.14159265358979323846)));
-    int32_t window = (int32_t)fmod(counts + 32767.0, (double)MULTI_TURN_SPAN);
-    if (window < 0) {
-        window += MULTI_TURN_SPAN;
-    }
-    double steps_per_s = io->sign * *io->wheel->qvel * RAD_TO_DEG * (COUNTS_PER_REV / 360.0);
-    double load = io->wheel->coasting ? 0.0 : io->sign * io->wheel->duty * 1000.0;
-    ob_scs_put_u16(out, ob_scs_sm_encode(window - 32767, OB_SCS_POSITION_SIGN_BIT));
-    ob_scs_put_u16(out + 2, ob_scs_sm_encode((int32_t)lround(steps_per_s), OB_SCS_SPEED_SIGN_BIT));
-    ob_scs_put_u16(out + 4, ob_scs_sm_encode((int32_t)lround(load), OB_SCS_LOAD_SIGN_BIT));
-}
-
-/* The servo's answer to one request frame, into self->reply (nothing for broadcasts and silence). */
-static void execute(ServoWireObject *self, const ob_scs_frame_t *frame) {
-    self->packets++;
-    if (frame->code == OB_SCS_INSTR_SYNC_WRITE) {
-        if (frame->param_len < 2) {
-            return;
-        }
-        uint8_t address = frame->params[0], width = frame->params[1];
-        for (size_t i = 2; width > 0 && i + width < frame->param_len + 1u; i += (size_t)width + 1u) {
-            servo_t *servo = find(self, frame->params[i]);
-            if (servo != NULL && !servo->silent) {
-                write_registers(servo, address, &frame->params[i + 1], width);
-            }
-        }
-        return;
-    }
-    servo_t *servo = find(self, frame->id);
-    if (servo == NULL || servo->silent) {
-        return;
-    }
-    uint8_t params[6];
-    size_t n = 0;
-    if (frame->code == OB_SCS_INSTR_READ) {
-        if (frame->param_len != 2 || frame->params[0] != OB_SCS_REG_PRESENT_POSITION || frame->params[1] != 6) {
-            return; /* the engine reads nothing else; a real servo would, but no one asks here */
-        }
-        feedback(servo, params);
-        n = 6;
-    } else if (frame->code == OB_SCS_INSTR_WRITE) {
-        if (frame->param_len < 2) {
-            return;
-        }
-        write_registers(servo, frame->params[0], &frame->params[1], frame->param_len - 1u);
-    } else if (frame->code != OB_SCS_INSTR_PING) {
-        return;
-    }
-    int len = ob_scs_encode_status(servo->id, 0, params, n, self->reply, sizeof(self->reply));
-    self->reply_len = len > 0 ? (size_t)len : 0u;
+static void shaft_sense(void *ctx, int index, double *counts, double *speed_cps, double *load_permille) {
+    const WheelIOObject *io = ((ServoWireObject *)ctx)->wheels[index];
+    *counts = io->sign * *io->wheel->qpos * (COUNTS_PER_REV / (2.0 * 3.14159265358979323846));
+    *speed_cps = io->sign * *io->wheel->qvel * RAD_TO_DEG * (COUNTS_PER_REV / 360.0);
+    *load_permille = io->wheel->coasting ? 0.0 : io->sign * io->wheel->duty * 1000.0;
 }
 
 /* ---- The wire (ob_uart_t) ---- */
@@ -197,23 +108,12 @@ static bool wire_write(void *ctx, const uint8_t *data, size_t n) {
     self->line_busy_us += (uint64_t)n * self->byte_us;
     self->clock_us = sent; /* half duplex: the write returns once the bytes are out */
     self->line_free_us = sent;
-    self->reply_len = 0;
-    ob_scs_frame_t frame;
-    size_t offset = 0;
-    while (offset < n) {
-        ob_scs_parse_t result = ob_scs_parse_frame(data + offset, n - offset, &frame);
-        if (result == OB_SCS_PARSE_OK) {
-            execute(self, &frame);
-        }
-        if (frame.consumed == 0 || result == OB_SCS_PARSE_NEED_MORE) {
-            break;
-        }
-        offset += frame.consumed;
-    }
-    if (self->reply_len > 0) {
-        self->reply_done_us = sent + self->return_delay_us + (uint64_t)self->reply_len * self->byte_us;
+    self->bus.reply_len = 0;
+    ob_emu_bus_write(&self->bus, data, n, (uint32_t)sent);
+    if (self->bus.reply_len > 0) {
+        self->reply_done_us = sent + self->return_delay_us + (uint64_t)self->bus.reply_len * self->byte_us;
         self->line_free_us = self->reply_done_us;
-        self->line_busy_us += (uint64_t)self->reply_len * self->byte_us;
+        self->line_busy_us += (uint64_t)self->bus.reply_len * self->byte_us;
     }
     return true;
 }
@@ -221,22 +121,18 @@ static bool wire_write(void *ctx, const uint8_t *data, size_t n) {
 static size_t wire_read(void *ctx, uint8_t *buf, size_t cap, uint32_t timeout_us) {
     ServoWireObject *self = ctx;
     uint64_t now = wire_now(self);
-    if (self->reply_len == 0 || self->reply_done_us > now + timeout_us) {
+    if (self->bus.reply_len == 0 || self->reply_done_us > now + timeout_us) {
         self->clock_us = now + timeout_us; /* waited the whole timeout */
         return 0;
     }
     if (self->reply_done_us > now) {
         self->clock_us = self->reply_done_us;
     }
-    size_t n = self->reply_len < cap ? self->reply_len : cap;
-    memcpy(buf, self->reply, n);
-    memmove(self->reply, self->reply + n, self->reply_len - n);
-    self->reply_len -= n;
-    return n;
+    return ob_emu_bus_read(&self->bus, buf, cap);
 }
 
 static void wire_flush_input(void *ctx) {
-    ((ServoWireObject *)ctx)->reply_len = 0;
+    ((ServoWireObject *)ctx)->bus.reply_len = 0;
 }
 
 static uint32_t wire_now_us(void *ctx) {
@@ -268,21 +164,22 @@ static int sw_init(ServoWireObject *self, PyObject *args, PyObject *kwargs) {
     self->byte_us = ob_uart_byte_us((uint32_t)baud);
     self->return_delay_us = (uint32_t)delay;
     self->uart = (ob_uart_t){wire_write, wire_read, wire_flush_input, wire_now_us, self};
+    ob_emu_bus_init(&self->bus, (ob_emu_shaft_t){NULL, shaft_sense, shaft_written, self});
     return 0;
 }
 
 static int sw_traverse(ServoWireObject *self, visitproc visit, void *arg) {
     Py_VISIT(self->controller);
-    for (int i = 0; i < MAX_SERVOS; i++) {
-        Py_VISIT(self->servos[i].wheel);
+    for (int i = 0; i < OB_EMU_MAX_SERVOS; i++) {
+        Py_VISIT(self->wheels[i]);
     }
     return 0;
 }
 
 static int sw_clear(ServoWireObject *self) {
-    for (int i = 0; i < MAX_SERVOS; i++) {
-        self->servos[i].used = 0;
-        Py_CLEAR(self->servos[i].wheel);
+    for (int i = 0; i < OB_EMU_MAX_SERVOS; i++) {
+        ob_emu_bus_remove(&self->bus, i);
+        Py_CLEAR(self->wheels[i]);
     }
     Py_CLEAR(self->controller);
     return 0;
@@ -313,22 +210,17 @@ static PyObject *sw_attach(ServoWireObject *self, PyObject *args) {
     if (!PyArg_ParseTuple(args, "OO!:attach", &id_obj, &WheelIOType, &wheel) || id_arg(id_obj, &id) < 0) {
         return NULL;
     }
-    if (self->controller == NULL || find(self, id) != NULL) {
+    if (self->controller == NULL || ob_emu_bus_find(&self->bus, id) >= 0) {
         PyErr_Format(PyExc_ValueError, "ServoWire.attach: servo id %d is already on the wire", id);
         return NULL;
     }
-    for (int i = 0; i < MAX_SERVOS; i++) {
-        servo_t *servo = &self->servos[i];
-        if (!servo->used) {
-            memset(servo, 0, sizeof(*servo));
-            servo->used = 1;
-            servo->id = id;
-            servo->wheel = (WheelIOObject *)Py_NewRef(wheel);
-            Py_RETURN_NONE;
-        }
+    int index = ob_emu_bus_add(&self->bus, id);
+    if (index < 0) {
+        PyErr_Format(PyExc_ValueError, "ServoWire.attach: at most %d servos", OB_EMU_MAX_SERVOS);
+        return NULL;
     }
-    PyErr_Format(PyExc_ValueError, "ServoWire.attach: at most %d servos", MAX_SERVOS);
-    return NULL;
+    Py_XSETREF(self->wheels[index], (WheelIOObject *)Py_NewRef(wheel));
+    Py_RETURN_NONE;
 }
 
 static PyObject *sw_detach(ServoWireObject *self, PyObject *arg) {
@@ -336,10 +228,10 @@ static PyObject *sw_detach(ServoWireObject *self, PyObject *arg) {
     if (id_arg(arg, &id) < 0) {
         return NULL;
     }
-    servo_t *servo = find(self, id);
-    if (servo != NULL) {
-        servo->used = 0;
-        Py_CLEAR(servo->wheel);
+    int index = ob_emu_bus_find(&self->bus, id);
+    if (index >= 0) {
+        ob_emu_bus_remove(&self->bus, index);
+        Py_CLEAR(self->wheels[index]);
     }
     Py_RETURN_NONE;
 }
@@ -351,12 +243,12 @@ static PyObject *sw_set_silent(ServoWireObject *self, PyObject *args) {
     if (!PyArg_ParseTuple(args, "Op:set_silent", &id_obj, &silent) || id_arg(id_obj, &id) < 0) {
         return NULL;
     }
-    servo_t *servo = find(self, id);
-    if (servo == NULL) {
+    int index = ob_emu_bus_find(&self->bus, id);
+    if (index < 0) {
         PyErr_Format(PyExc_ValueError, "ServoWire.set_silent: servo id %d is not on the wire", id);
         return NULL;
     }
-    servo->silent = silent;
+    self->bus.servos[index].silent = silent != 0;
     Py_RETURN_NONE;
 }
 
@@ -381,7 +273,7 @@ static PyObject *sw_uart(ServoWireObject *self, PyObject *unused) {
 static PyObject *sw_get_stats(ServoWireObject *self, void *closure) {
     (void)closure;
     return Py_BuildValue("{s:K,s:k,s:K}", "line_busy_us", (unsigned long long)self->line_busy_us, "packets",
-                         self->packets, "clock_us", (unsigned long long)self->clock_us);
+                         (unsigned long)self->bus.packets, "clock_us", (unsigned long long)self->clock_us);
 }
 
 static PyMethodDef sw_methods[] = {

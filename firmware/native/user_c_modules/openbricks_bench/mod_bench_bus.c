@@ -1,6 +1,7 @@
 /*
  * _openbricks_bench.BenchBus: emulated ST-3032s on an in-memory wire
- * (bench_servos.c) for the unix port's tests.
+ * (bench_servos.c, on the shared servo emulation of emulated_servo.c) for
+ * the unix port's tests.
  *
  *     bus = BenchBus((1, 2))        # servo ids; no_load_dps=888 (the ST-3032's)
  *     uart = bus                    # what machine.UART(1, ...) hands the drivers
@@ -30,17 +31,17 @@ typedef struct {
 
 static bool wire_write(void *ctx, const uint8_t *data, size_t n) {
     bench_bus_obj_t *self = ctx;
-    ob_bench_bus_write(&self->bus, data, n, ob_hard_timer_now_us());
+    ob_emu_bus_write(&self->bus.wire, data, n, ob_hard_timer_now_us());
     return true;
 }
 
 static size_t wire_read(void *ctx, uint8_t *buf, size_t cap, uint32_t timeout_us) {
     (void)timeout_us; /* replies are in at once; nothing more will come */
-    return ob_bench_bus_read(&((bench_bus_obj_t *)ctx)->bus, buf, cap);
+    return ob_emu_bus_read(&((bench_bus_obj_t *)ctx)->bus.wire, buf, cap);
 }
 
 static void wire_flush_input(void *ctx) {
-    ((bench_bus_obj_t *)ctx)->bus.reply_len = 0;
+    ((bench_bus_obj_t *)ctx)->bus.wire.reply_len = 0;
 }
 
 static uint32_t wire_now_us(void *ctx) {
@@ -52,7 +53,7 @@ static uint32_t wire_now_us(void *ctx) {
 
 static ob_bench_servo_t *servo_arg(bench_bus_obj_t *self, mp_obj_t id_in) {
     mp_int_t id = mp_obj_get_int(id_in);
-    ob_bench_servo_t *servo = id >= 0 && id <= 253 ? ob_bench_bus_find(&self->bus, (uint8_t)id) : NULL;
+    ob_bench_servo_t *servo = id >= 0 && id <= OB_SCS_MAX_SERVO_ID ? ob_bench_bus_find(&self->bus, (uint8_t)id) : NULL;
     if (servo == NULL) {
         mp_raise_msg_varg(&mp_type_ValueError, MP_ERROR_TEXT("BenchBus: no servo with id %d on this bus"), (int)id);
     }
@@ -78,7 +79,7 @@ static mp_obj_t bench_bus_make_new(const mp_obj_type_t *type, size_t n_args, siz
     mp_obj_get_array(vals[ARG_ids].u_obj, &n, &ids);
     for (size_t i = 0; i < n; i++) {
         mp_int_t id = mp_obj_get_int(ids[i]);
-        if (id < 0 || id > 253 || ob_bench_bus_add(&self->bus, (uint8_t)id, ob_hard_timer_now_us()) == NULL) {
+        if (id < 0 || id > OB_SCS_MAX_SERVO_ID || ob_bench_bus_add(&self->bus, (uint8_t)id, ob_hard_timer_now_us()) == NULL) {
             mp_raise_msg_varg(&mp_type_ValueError,
                               MP_ERROR_TEXT("BenchBus(): servo id %d is outside 0..253, repeated, or one too many "
                                             "(at most %d servos)"),
@@ -99,7 +100,7 @@ static MP_DEFINE_CONST_FUN_OBJ_2(bench_bus_write_obj, bench_bus_write);
 
 static mp_obj_t bench_bus_read(size_t n_args, const mp_obj_t *args) {
     bench_bus_obj_t *self = MP_OBJ_TO_PTR(args[0]);
-    size_t cap = self->bus.reply_len;
+    size_t cap = self->bus.wire.reply_len;
     if (n_args > 1 && args[1] != mp_const_none) {
         mp_int_t want = mp_obj_get_int(args[1]);
         cap = want < 0 ? cap : ((size_t)want < cap ? (size_t)want : cap);
@@ -107,15 +108,15 @@ static mp_obj_t bench_bus_read(size_t n_args, const mp_obj_t *args) {
     if (cap == 0) {
         return mp_const_none; /* as machine.UART with timeout=0: nothing waiting */
     }
-    uint8_t buf[sizeof(self->bus.reply)];
-    size_t n = ob_bench_bus_read(&self->bus, buf, cap);
+    uint8_t buf[sizeof(self->bus.wire.reply)];
+    size_t n = ob_emu_bus_read(&self->bus.wire, buf, cap);
     return mp_obj_new_bytes(buf, n);
 }
 static MP_DEFINE_CONST_FUN_OBJ_VAR_BETWEEN(bench_bus_read_obj, 1, 2, bench_bus_read);
 
 static mp_obj_t bench_bus_any(mp_obj_t self_in) {
     bench_bus_obj_t *self = MP_OBJ_TO_PTR(self_in);
-    return MP_OBJ_NEW_SMALL_INT((mp_int_t)self->bus.reply_len);
+    return MP_OBJ_NEW_SMALL_INT((mp_int_t)self->bus.wire.reply_len);
 }
 static MP_DEFINE_CONST_FUN_OBJ_1(bench_bus_any_obj, bench_bus_any);
 
@@ -133,13 +134,13 @@ static mp_obj_t bench_bus_angle_deg(mp_obj_t self_in, mp_obj_t id_in) {
 static MP_DEFINE_CONST_FUN_OBJ_2(bench_bus_angle_deg_obj, bench_bus_angle_deg);
 
 static mp_obj_t bench_bus_set_silent(mp_obj_t self_in, mp_obj_t id_in, mp_obj_t silent_in) {
-    servo_arg(MP_OBJ_TO_PTR(self_in), id_in)->silent = mp_obj_is_true(silent_in);
+    servo_arg(MP_OBJ_TO_PTR(self_in), id_in)->firmware->silent = mp_obj_is_true(silent_in);
     return mp_const_none;
 }
 static MP_DEFINE_CONST_FUN_OBJ_3(bench_bus_set_silent_obj, bench_bus_set_silent);
 
 static mp_obj_t bench_bus_packets(mp_obj_t self_in) {
-    return mp_obj_new_int_from_uint(((bench_bus_obj_t *)MP_OBJ_TO_PTR(self_in))->bus.packets);
+    return mp_obj_new_int_from_uint(((bench_bus_obj_t *)MP_OBJ_TO_PTR(self_in))->bus.wire.packets);
 }
 static MP_DEFINE_CONST_FUN_OBJ_1(bench_bus_packets_obj, bench_bus_packets);
 
