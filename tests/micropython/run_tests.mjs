@@ -279,7 +279,7 @@ class Run {
 }
 
 // --filter TEXT keeps the runtime modules and test functions whose id contains TEXT; ids read
-// `openbricks.drivers.st3215` and `drivers/test_st3215.py::test_run_angle`.
+// `openbricks.drivers.st3215` and `drivers/test_l298n.py::test_invert_swaps_the_direction`.
 function select(plan, filter) {
   if (!filter) return plan;
   const testModules = [];

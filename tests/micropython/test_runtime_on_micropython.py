@@ -3,7 +3,7 @@
 Collection finds, from the source alone, every runtime test function
 (tests/openbricks/**/test_*.py, minus files that set NEEDS_NATIVE = True) and
 every module under openbricks/, and makes one pytest test of each:
-`mpy::drivers/test_st3215.py::test_run_angle`, `import::openbricks.drivers.st3215`.
+`mpy::drivers/test_l298n.py::test_invert_swaps_the_direction`, `import::openbricks.drivers.st3215`.
 One run of run_tests.mjs (the WebAssembly MicroPython in Node) produces all
 their results; each test then reports its own, with MicroPython's traceback.
 The pytest summary therefore counts the CPython runs and the MicroPython runs.
