@@ -18,10 +18,11 @@ from __future__ import annotations
 import time
 from dataclasses import dataclass
 
+from openbricks_native import scs
 from openbricks_server.errors import CliError, UsageError
 
 FIRST_ID = 0
-LAST_ID = 253
+LAST_ID = scs.MAX_SERVO_ID
 _UNLOCK, _LOCK = b"\x00", b"\x01"
 
 
@@ -32,7 +33,8 @@ class ServoIdError(CliError):
 def check_id(option: str, value: int | None) -> None:
     if value is not None and not FIRST_ID <= value <= LAST_ID:
         raise UsageError(
-            f"{option} {value}: servo bus ids are {FIRST_ID}..{LAST_ID} (254 is the broadcast id)"
+            f"{option} {value}: servo bus ids are {FIRST_ID}..{LAST_ID} "
+            f"({scs.BROADCAST_ID} is the broadcast id)"
         )
 
 
@@ -49,8 +51,6 @@ class UsbServoBus:
 
     def __init__(self, port: str, baudrate: int, timeout_s: float):
         import serial
-
-        from openbricks_native import scs
 
         self.scs = scs
         self.port = port
