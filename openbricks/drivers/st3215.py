@@ -2,9 +2,9 @@
 
 Every servo on one UART shares one `_SCServoBus` (a registry keyed by UART
 id), so an ST-3215 arm and two ST-3032 wheels can sit on one daisy chain. The
-protocol is spoken here in Python so the driver works on any firmware build;
-the native SCS codec exists for the hard-tick engine a DriveBase hands the
-UART to when it adopts its wheels.
+transactions (retries, echo, timeouts) are run here in Python; the packets are
+built and parsed by the firmware's SCS codec (`_openbricks_native.scs`), the
+one the hard-tick engine a DriveBase hands the UART to speaks.
 
 Packet: 0xFF 0xFF ID LEN INSTR PARAMS... CHECKSUM, LEN = len(PARAMS) + 2,
 CHECKSUM = ~(ID + LEN + INSTR + sum(PARAMS)) & 0xFF. A reply carries the
@@ -69,26 +69,14 @@ def _u16(data, i):
     return data[i] | (data[i + 1] << 8)
 
 
-def _packet(servo_id, instr, params):
-    body = bytes((servo_id, len(params) + 2, instr)) + bytes(params)
-    return b"\xff\xff" + body + bytes((~sum(body) & 0xFF,))
-
-
 def _parse_reply(buf, servo_id):
     """(status, params) once `buf` holds a valid reply from `servo_id`; None if incomplete; False if bad."""
-    start = buf.find(b"\xff\xff")
-    if start < 0:
+    reply = _scs.decode_status(buf)
+    if reply.result == "need_more":
         return None
-    if len(buf) < start + 4:
-        return None
-    length = buf[start + 3]
-    end = start + 4 + length
-    if len(buf) < end:
-        return None
-    body = buf[start + 2 : end - 1]
-    if length < 2 or (~sum(body) & 0xFF) != buf[end - 1] or body[0] != servo_id:
+    if reply.result != "ok" or reply.id != servo_id:
         return False
-    return body[2], bytes(body[3:])
+    return reply.error, bytes(reply.params)
 
 
 def not_responding_message(label, servo_id, slot, where, replies, failed, in_a_row):
@@ -230,7 +218,7 @@ class _SCServoBus:
     def request(self, servo_id, instr, params, attempts=_ATTEMPTS):
         """Send one instruction and return (status, reply params), or None if no valid reply came."""
         self._check_open()
-        sent = _packet(servo_id, instr, params)
+        sent = _scs.frame(servo_id, instr, params)
         stats = self._stats.get(servo_id)
         if stats is None:
             stats = self._stats[servo_id] = [0, 0, 0]
@@ -271,7 +259,7 @@ class _SCServoBus:
                 )
             params.append(servo_id)
             params.extend(data)
-        self._send(_packet(_scs.BROADCAST_ID, _scs.SYNC_WRITE, params))
+        self._send(_scs.frame(_scs.BROADCAST_ID, _scs.SYNC_WRITE, params))
 
 
 def forget_buses():
