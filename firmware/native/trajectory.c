@@ -172,9 +172,12 @@ void ob_trajectory_plan_move(ob_trajectory_t *tr, float x0_deg, float v0_dps, fl
             return;
         }
         /* Moving while on target: a move "toward" it starts by moving away,
-         * so it turns around and comes back instead of stopping dead. */
+         * so it turns around and comes back instead of stopping dead. Planned
+         * from the target itself (a start this close counts as on it): the
+         * forward phase and the phases sampled back from the target meet. */
         d = -v0_dps;
         distance = 0.0f;
+        x0_deg = target_deg;
     }
     float dir = sign_of(d);
     float u0 = dir * v0_dps;

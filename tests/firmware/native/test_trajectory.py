@@ -277,6 +277,7 @@ def test_speed_never_exceeds_the_limit_unless_the_start_did(move):
 @given(moves)
 @example(move=(0.0, 0.0, 137.0, 14239.150390625, 3373.66818875526, 312.8679459219802))  # time rounding
 @example(move=(0.0, 179.0, 717.0, 13.0, 1433.0, 716.0))  # peak a hair above the start, tiny accel
+@example(move=(0.0, 1e-05, 1.0, 10.0, 10.0, 1.0))  # moving, a hair short of the target: turns round
 def test_samples_are_continuous_across_phases(move):
     p, _ = rest_profile(move)
     # Float32 rounding is the only allowed jump: a couple of ulps of the largest term a sample adds up
