@@ -5,11 +5,11 @@
 Runs on the unix MicroPython with the real `_openbricks_native` and `_openbricks_bench` (emulated
 hardware in C on native links, as the hub's peripherals are):
 
-- an MG370 shaft turning at 60000 counts/s (about 320 deg/s) behind a PCNT unit whose 16-bit
-  counter returns to 0 every 32767 counts: `PCNTEncoder` on it is read by the hard tick every
-  millisecond, so a program that spins for three seconds without reading it (five and a half wraps)
-  still gets the exact count. (The rate leaves a loaded host's timer thread 270 ms of stall before
-  a step between two reads gets ambiguous; the hub's esp_timer does not stall.)
+- an MG370 shaft turning at 22000 counts/s behind a PCNT unit whose 16-bit counter returns to 0
+  every 32767 counts: `PCNTEncoder` on it is read by the hard tick every millisecond, so a program
+  that spins for three seconds without reading it (two wraps) still gets the exact count. (The
+  rate leaves a loaded host's timer thread 740 ms of stall before a step between two reads gets
+  ambiguous; the hub's esp_timer does not stall.)
 - an ICM-45686 riding on a robot of two emulated ST-3032s whose tyres scrub (the body turns 0.9 of
   what the wheels say): the runtime's ICM45686 driver on the firmware's C driver, sampled by the hard
   tick, and a DriveBase with use_gyro(True) reading that heading in C, so the drive base stays on
@@ -49,7 +49,7 @@ def encoder():
     enc = _openbricks_native.PCNTEncoder(MG370_CPR, counter=shaft)
     start = shaft.true_count()
     reads0 = shaft.reads()
-    shaft.set_rate(60_000)
+    shaft.set_rate(22_000)
     rounds = busy(3000)
     shaft.set_rate(0)
     result = {
@@ -79,7 +79,7 @@ def gyro_drive():
     db.use_gyro(True)
     process = _openbricks_native.motor_process
     ticks0, hard0, bursts0 = process.tick_count, process.hard_tick_count(), link.bursts()
-    heading0 = link.true_heading()
+    heading0, unseen0 = link.true_heading(), link.unseen_deg()
     db.turn(90, wait=False)
     rounds = busy(4000)
     result = {
@@ -88,6 +88,7 @@ def gyro_drive():
         "done": db.done(),
         "angle_deg": db.angle(),
         "true_turn_deg": link.true_heading() - heading0,
+        "unseen_deg": link.unseen_deg() - unseen0,
         "imu_heading_deg": imu.heading(),
         "ticks_itself": _openbricks_native.ticks_itself(),
         "control_ticks": process.tick_count - ticks0,

@@ -7,6 +7,7 @@
 #include <string.h>
 
 #include "icm45686.h"
+#include "imu_yaw.h"
 #include "pcnt.h"
 
 #define PI 3.14159265358979323846
@@ -121,10 +122,17 @@ bool ob_bench_imu_transfer(ob_bench_imu_t *imu, const uint8_t *tx, uint8_t *rx, 
             return false;
         }
         uint32_t gap_us = now_us - imu->last_burst_us;
-        if (imu->bursts > 0u && gap_us > imu->max_gap_us) {
-            imu->max_gap_us = gap_us;
+        double heading_deg = ob_bench_imu_true_heading_deg(imu, now_us);
+        if (imu->bursts > 0u) {
+            if (gap_us > imu->max_gap_us) {
+                imu->max_gap_us = gap_us;
+            }
+            if (gap_us > OB_IMU_YAW_MAX_GAP_US) {
+                imu->unseen_deg += heading_deg - imu->last_burst_heading_deg;
+            }
         }
         imu->last_burst_us = now_us;
+        imu->last_burst_heading_deg = heading_deg;
         imu->bursts++;
         uint8_t pwr = imu->regs[OB_ICM45686_REG_PWR_MGMT0];
         bool accel_on = (pwr & 3u) >= 2u, gyro_on = ((pwr >> 2) & 3u) >= 2u;

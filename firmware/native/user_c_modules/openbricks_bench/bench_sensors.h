@@ -53,6 +53,13 @@ typedef struct {
     uint32_t bursts;
     uint32_t last_burst_us;
     uint32_t max_gap_us;  /* longest time between two bursts: how long the reader stalled */
+    double last_burst_heading_deg;
+    /*
+     * True rotation during gaps between bursts longer than the heading integrator bridges
+     * (OB_IMU_YAW_MAX_GAP_US): what no gyro reader could have seen. A host's timer thread can
+     * stall that long under load; the hub's esp_timer does not.
+     */
+    double unseen_deg;
 } ob_bench_imu_t;
 
 void ob_bench_imu_init(ob_bench_imu_t *imu, ob_bench_bus_t *bus, uint8_t left_id, uint8_t right_id,

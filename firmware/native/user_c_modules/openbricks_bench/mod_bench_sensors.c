@@ -148,10 +148,16 @@ static mp_obj_t bench_imu_max_gap_us(mp_obj_t self_in) {
 }
 static MP_DEFINE_CONST_FUN_OBJ_1(bench_imu_max_gap_us_obj, bench_imu_max_gap_us);
 
+static mp_obj_t bench_imu_unseen_deg(mp_obj_t self_in) {
+    return mp_obj_new_float(((bench_imu_obj_t *)MP_OBJ_TO_PTR(self_in))->imu.unseen_deg);
+}
+static MP_DEFINE_CONST_FUN_OBJ_1(bench_imu_unseen_deg_obj, bench_imu_unseen_deg);
+
 static const mp_rom_map_elem_t bench_imu_locals_table[] = {
     {MP_ROM_QSTR(MP_QSTR_true_heading), MP_ROM_PTR(&bench_imu_true_heading_obj)},
     {MP_ROM_QSTR(MP_QSTR_bursts), MP_ROM_PTR(&bench_imu_bursts_obj)},
     {MP_ROM_QSTR(MP_QSTR_max_gap_us), MP_ROM_PTR(&bench_imu_max_gap_us_obj)},
+    {MP_ROM_QSTR(MP_QSTR_unseen_deg), MP_ROM_PTR(&bench_imu_unseen_deg_obj)},
 };
 static MP_DEFINE_CONST_DICT(bench_imu_locals, bench_imu_locals_table);
 
