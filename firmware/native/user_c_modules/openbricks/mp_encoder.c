@@ -53,7 +53,8 @@ static mp_obj_t pcnt_encoder_make_new(const mp_obj_type_t *type, size_t n_args, 
     if (args[ARG_modulus].u_obj != MP_OBJ_NULL) {
         cfg.modulus = ob_mp_int32(args[ARG_modulus].u_obj, "PCNTEncoder()", "modulus");
     }
-    pcnt_encoder_obj_t *self = mp_obj_malloc(pcnt_encoder_obj_t, type);
+    /* A finaliser: a soft reset sweeps the heap, and the hard tick must stop reading it first. */
+    pcnt_encoder_obj_t *self = mp_obj_malloc_with_finaliser(pcnt_encoder_obj_t, type);
     ob_encoder_error_t error = ob_encoder_init(&self->enc, &cfg, NULL);
     if (error != OB_ENCODER_OK) {
         mp_raise_msg_varg(&mp_type_ValueError, MP_ERROR_TEXT("PCNTEncoder(): %s"), ob_encoder_strerror(error));
@@ -182,6 +183,7 @@ static const mp_rom_map_elem_t pcnt_encoder_locals_table[] = {
     {MP_ROM_QSTR(MP_QSTR_direction), MP_ROM_PTR(&pcnt_encoder_direction_obj)},
     {MP_ROM_QSTR(MP_QSTR_max_step), MP_ROM_PTR(&pcnt_encoder_max_step_obj)},
     {MP_ROM_QSTR(MP_QSTR_close), MP_ROM_PTR(&pcnt_encoder_close_obj)},
+    {MP_ROM_QSTR(MP_QSTR___del__), MP_ROM_PTR(&pcnt_encoder_close_obj)},
     #if defined(ESP_PLATFORM)
     {MP_ROM_QSTR(MP_QSTR_HARDWARE), MP_ROM_TRUE},
     #else

@@ -44,6 +44,12 @@ void ob_mp_locked_attr(mp_obj_t self_in, qstr attr, mp_obj_t *dest, const mp_obj
     if (dest[0] != MP_OBJ_NULL) {
         return; /* stores and deletes: read-only */
     }
+    if (attr == MP_QSTR___del__) {
+        /* The GC runs finalisers while the heap is locked, so no bound method can be allocated
+         * here; a finaliser takes the motor lock itself. */
+        dest[1] = MP_OBJ_SENTINEL;
+        return;
+    }
     mp_map_elem_t *elem = mp_map_lookup((mp_map_t *)&locals_dict->map, MP_OBJ_NEW_QSTR(attr), MP_MAP_LOOKUP);
     if (elem == NULL || !mp_obj_is_fun(elem->value)) {
         dest[1] = MP_OBJ_SENTINEL; /* not a method: the usual lookup */

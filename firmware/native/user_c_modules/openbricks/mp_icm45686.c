@@ -126,7 +126,8 @@ static mp_obj_t icm45686_make_new(const mp_obj_type_t *type, size_t n_args, size
         mp_raise_ValueError(MP_ERROR_TEXT("ICM45686(): scale must be non-zero: -1.0 for a face-up ICM-45686, "
                                           "+1.0 face-down"));
     }
-    icm45686_obj_t *self = mp_obj_malloc(icm45686_obj_t, type);
+    /* A finaliser: a soft reset sweeps the heap, and the hard tick must stop sampling it first. */
+    icm45686_obj_t *self = mp_obj_malloc_with_finaliser(icm45686_obj_t, type);
     self->transfer = transfer;
     self->delay_ms = delay_ms == mp_const_none ? MP_OBJ_NULL : delay_ms;
     self->error = MP_OBJ_NULL;
@@ -303,6 +304,7 @@ static const mp_rom_map_elem_t icm45686_locals_table[] = {
     {MP_ROM_QSTR(MP_QSTR_acceleration), MP_ROM_PTR(&icm45686_acceleration_obj)},
     {MP_ROM_QSTR(MP_QSTR_stats), MP_ROM_PTR(&icm45686_stats_obj)},
     {MP_ROM_QSTR(MP_QSTR_close), MP_ROM_PTR(&icm45686_close_obj)},
+    {MP_ROM_QSTR(MP_QSTR___del__), MP_ROM_PTR(&icm45686_close_obj)},
     #if defined(ESP_PLATFORM)
     {MP_ROM_QSTR(MP_QSTR_HARDWARE), MP_ROM_TRUE},
     #else
