@@ -20,6 +20,7 @@ from fastapi import APIRouter, Query, WebSocket, WebSocketDisconnect
 from openbricks_server.daemon.auth import Caller, operator_action
 from openbricks_server.daemon.errors import ApiError
 from openbricks_server.daemon.events import control
+from openbricks_server.daemon.routers.hub_lookup import hub_manager
 
 router = APIRouter(tags=["events"])
 
@@ -57,10 +58,7 @@ async def _ping(websocket: WebSocket, caller: Caller, message: dict) -> dict:
 @ws_command("stop_all", mutating=True)
 async def _stop_all(websocket: WebSocket, caller: Caller, message: dict) -> dict:
     """STOP ALL from an open page without a round of HTTP: every connected hub, one report per hub."""
-    hubs = websocket.app.state.ctx.hubs
-    if hubs is None:
-        raise ApiError(503, "hubs_unavailable", "the hub manager is not running", "restart the console")
-    return {"hubs": await hubs.stop_all(caller.label)}
+    return {"hubs": await hub_manager(websocket.app.state.ctx).stop_all(caller.label)}
 
 
 @router.websocket("/events")

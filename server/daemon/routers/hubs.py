@@ -10,7 +10,6 @@ started the program, with its run id; its output, telemetry and end follow on th
 from __future__ import annotations
 
 import asyncio
-from contextlib import contextmanager
 
 from fastapi import APIRouter, Depends, Path, Request
 from pydantic import BaseModel, Field, model_validator
@@ -20,8 +19,8 @@ from openbricks_server.daemon.auth import Caller, require_operator, require_view
 from openbricks_server.daemon.competition import unlocked
 from openbricks_server.daemon.errors import ApiError
 from openbricks_server.daemon.hubs.actor import HubActor
-from openbricks_server.daemon.hubs.errors import HubOperationError
 from openbricks_server.daemon.programs import check_name, check_source
+from openbricks_server.daemon.routers.hub_lookup import find_hub, hub_errors, hub_manager
 
 router = APIRouter(prefix="/hubs", tags=["hubs"], dependencies=[Depends(require_viewer)])
 
@@ -135,26 +134,6 @@ class LogText(BaseModel):
     text: str  # the log as the hub keeps it: `<epoch ms> <text>` lines, framing included
 
 
-@contextmanager
-def _api_errors():
-    try:
-        yield
-    except HubOperationError as exc:
-        raise ApiError(exc.status, exc.error, exc.message, exc.hint or None, exc.detail or None) from None
-
-
-def _hubs(request: Request):
-    hubs = request.app.state.ctx.hubs
-    if hubs is None:
-        raise ApiError(503, "hubs_unavailable", "the hub manager is not running", "restart the console")
-    return hubs
-
-
-def _actor(request: Request, ref: str) -> HubActor:
-    with _api_errors():
-        return _hubs(request).get(ref)
-
-
 def _out(actor: HubActor) -> HubOut:
     state = actor.state
     return HubOut(
@@ -196,28 +175,28 @@ async def _program(request: Request, body: ProgramRequest) -> Program:
 @router.get("", response_model=HubList)
 async def list_hubs(request: Request) -> HubList:
     """Every hub the daemon knows: virtual, USB and BLE (seen on the scan), with status and holder."""
-    hubs = _hubs(request)
+    hubs = hub_manager(request.app.state.ctx)
     return HubList(hubs=[_out(actor) for actor in hubs.list()], ble=hubs.ble_status)
 
 
 @router.post("/stop-all", response_model=StopAll)
 async def stop_all(request: Request, caller: Caller = Depends(require_operator)) -> StopAll:
     """Stop every hub at once (Ctrl-C around any queue); one report per hub."""
-    reports = await _hubs(request).stop_all(caller.label)
+    reports = await hub_manager(request.app.state.ctx).stop_all(caller.label)
     return StopAll(hubs=[StopReport(**report) for report in reports])
 
 
 @router.get("/{hub}", response_model=HubOut)
 async def get_hub(request: Request, hub: str = HubRef) -> HubOut:
-    return _out(_actor(request, hub))
+    return _out(find_hub(request.app.state.ctx, hub))
 
 
 @router.post("/{hub}/connect", response_model=HubOut)
 async def connect(request: Request, hub: str = HubRef, caller: Caller = Depends(require_operator)) -> HubOut:
     """Connect (entering the raw REPL, reading its firmware, setting its clock, reading its run logs)
     and keep it connected, reconnecting after drops, until disconnected."""
-    actor = _actor(request, hub)
-    with _api_errors():
+    actor = find_hub(request.app.state.ctx, hub)
+    with hub_errors():
         await actor.connect()
     return _out(actor)
 
@@ -227,8 +206,8 @@ async def disconnect(
     request: Request, hub: str = HubRef, caller: Caller = Depends(require_operator)
 ) -> HubOut:
     """Give the hub back to its launcher (its button works) and close the link."""
-    actor = _actor(request, hub)
-    with _api_errors():
+    actor = find_hub(request.app.state.ctx, hub)
+    with hub_errors():
         await actor.disconnect(caller.label)
     return _out(actor)
 
@@ -241,8 +220,8 @@ async def identify(
     caller: Caller = Depends(require_operator),
 ) -> Identified:
     """Blink the hub's status LED white for a few seconds, to find it on the table."""
-    actor = _actor(request, hub)
-    with _api_errors():
+    actor = find_hub(request.app.state.ctx, hub)
+    with hub_errors():
         reply = await actor.identify(who=caller.label, duration_ms=(body or IdentifyRequest()).duration_ms)
     return Identified(hub_id=actor.hub_id, identify_ms=reply["identify_ms"])
 
@@ -255,9 +234,9 @@ async def run(
     caller: Caller = RUN_ALLOWED,
 ) -> RunStarted:
     """Check, compile, stage and run a program; answers once the hub started it."""
-    actor = _actor(request, hub)
+    actor = find_hub(request.app.state.ctx, hub)
     program = await _program(request, body)
-    with _api_errors():
+    with hub_errors():
         run_id = await actor.run(program, who=caller.label, program_name=program.filename)
     return RunStarted(run_id=run_id, hub_id=actor.hub_id)
 
@@ -270,7 +249,7 @@ async def upload(
     caller: Caller = UPLOAD_ALLOWED,
 ) -> Uploaded:
     """Stage a program as the hub's button program (or, with `path`, store its text there verbatim)."""
-    actor = _actor(request, hub)
+    actor = find_hub(request.app.state.ctx, hub)
     if body.path is not None and (
         not body.path.startswith("/") or body.path.endswith("/") or ".." in body.path
     ):
@@ -285,7 +264,7 @@ async def upload(
         program = Program(body.name, body.source)
     else:
         program = await _program(request, body)
-    with _api_errors():
+    with hub_errors():
         done = await actor.upload(program, who=caller.label, path=body.path)
     return Uploaded(hub_id=actor.hub_id, path=done["path"], bytes=done["bytes"])
 
@@ -293,7 +272,7 @@ async def upload(
 @router.post("/{hub}/stop", response_model=StopReport)
 async def stop(request: Request, hub: str = HubRef, caller: Caller = Depends(require_operator)) -> StopReport:
     """Interrupt whatever holds the hub (a run, an upload) and wait for the hub to confirm."""
-    return StopReport(**await _actor(request, hub).stop(caller.label))
+    return StopReport(**await find_hub(request.app.state.ctx, hub).stop(caller.label))
 
 
 @router.get("/{hub}/logs", response_model=list[LogEntry])
@@ -301,8 +280,8 @@ async def list_logs(
     request: Request, hub: str = HubRef, caller: Caller = Depends(require_viewer)
 ) -> list[LogEntry]:
     """The run logs kept on the hub (its last runs, however they were started)."""
-    actor = _actor(request, hub)
-    with _api_errors():
+    actor = find_hub(request.app.state.ctx, hub)
+    with hub_errors():
         runs = await actor.list_logs(who=caller.label)
     slots = int(actor.state.capabilities.get("log_slots", 10))
     return [LogEntry(index=r["index"], slot=r["index"] % slots, bytes=r["bytes"]) for r in runs]
@@ -316,8 +295,8 @@ async def read_log(
     caller: Caller = Depends(require_viewer),
 ) -> LogText:
     """One run log read from the hub, with its lines' hub time stamps."""
-    actor = _actor(request, hub)
-    with _api_errors():
+    actor = find_hub(request.app.state.ctx, hub)
+    with hub_errors():
         parsed = await actor.read_log(index, who=caller.label)
     return LogText(
         hub_id=actor.hub_id,

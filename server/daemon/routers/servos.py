@@ -13,8 +13,8 @@ from pydantic import BaseModel, Field, model_validator
 
 from openbricks_server.daemon.auth import Caller, require_operator, require_viewer
 from openbricks_server.daemon.errors import ApiError
-from openbricks_server.daemon.hubs.errors import HubOperationError
 from openbricks_server.daemon.jobs.servos import ServoBus, ServoJobs
+from openbricks_server.daemon.routers.hub_lookup import find_hub, hub_errors
 from openbricks_server.daemon.routers.jobs import registry
 from openbricks_server.errors import CliError
 
@@ -63,13 +63,7 @@ class SetIdOut(BaseModel):
 
 
 def _bus(request: Request, body: BusBody) -> ServoBus:
-    actor = None
-    if body.hub is not None:
-        hubs = request.app.state.ctx.hubs
-        if hubs is None:
-            raise ApiError(503, "hubs_unavailable", "the hub manager is not running", "restart the console")
-        with _api_errors():
-            actor = hubs.get(body.hub)
+    actor = find_hub(request.app.state.ctx, body.hub) if body.hub is not None else None
     port = body.port.strip() if body.port is not None else None
     return ServoBus(actor, port, body.baudrate, body.tx, body.rx, body.timeout_s)
 
@@ -77,9 +71,8 @@ def _bus(request: Request, body: BusBody) -> ServoBus:
 @contextmanager
 def _api_errors():
     try:
-        yield
-    except HubOperationError as exc:
-        raise ApiError(exc.status, exc.error, exc.message, exc.hint or None, exc.detail or None) from None
+        with hub_errors():
+            yield
     except CliError as exc:
         raise ApiError.invalid("servo_refused", str(exc), "nothing was changed on the bus") from None
 
