@@ -25,19 +25,6 @@ SEEDS = 20
 WORKERS = 2
 LATENCY_RUNS = 5
 
-DRIVE = """\
-import time
-from openbricks.drivers.st3032 import ST3032Motor
-
-left = ST3032Motor(1)
-right = ST3032Motor(2, invert=True)
-left.run_speed(360)
-right.run_speed(330)
-time.sleep_ms(3000)
-left.brake()
-right.brake()
-"""
-
 
 def _load() -> str:
     return f"load {os.getloadavg()[0]:.1f}"
@@ -79,6 +66,7 @@ def run() -> list[Row]:
     from distributed import LocalCluster
 
     from openbricks_sim.job import SimJob
+    from tests.sim.test_sweep import CURVE  # the drive the sweep tests run
 
     rows = []
     with tempfile.TemporaryDirectory(prefix="bench-sweep-") as folder:
@@ -86,7 +74,7 @@ def run() -> list[Row]:
         rows.append(_start_latency(folder, "wro"))
         program = os.path.join(folder, "drive.py")
         with open(program, "w") as f:
-            f.write(DRIVE)
+            f.write(CURVE)
         job = SimJob(program, world="wro", limit_ms=10_000)
         rows.append(_seeds_per_minute(f"local pool, {WORKERS} workers", job, workers=WORKERS))
         started = time.perf_counter()
