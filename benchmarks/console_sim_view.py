@@ -33,6 +33,7 @@ import uvicorn
 
 from benchmarks import Row
 from benchmarks._proc import proc_stat
+from tests.server.daemon.sim.proc_net import connections_to
 
 REPO = Path(__file__).resolve().parent.parent
 VIEWERS = (0, 1, 5, 20)
@@ -73,16 +74,6 @@ class _Daemon:
     def stop(self):
         self.server.should_exit = True
         self.thread.join(30)
-
-
-def _connections(port: int) -> int:
-    """Established TCP connections to 127.0.0.1:port (the viser server's clients)."""
-    count = 0
-    for line in Path("/proc/net/tcp").read_text().splitlines()[1:]:
-        local, _remote, state = line.split()[1:4]
-        if int(local.split(":")[1], 16) == port and state == "01":
-            count += 1
-    return count
 
 
 def _sample(client: httpx.Client, run_id: str, pid: int) -> tuple[float, int, float, float]:
@@ -126,7 +117,7 @@ def _measure(daemon: _Daemon, client: httpx.Client, viewers: int) -> dict:
             )
             assert clients.stdout.readline().strip() == "connected"
         time.sleep(1.0)  # the viewers' initial scene is sent and drawn
-        connections = _connections(job.port)
+        connections = connections_to(job.port)
         t0, sim0, cpu0, own0 = _sample(client, run_id, pid)
         time.sleep(WINDOW_S)
         t1, sim1, cpu1, own1 = _sample(client, run_id, pid)

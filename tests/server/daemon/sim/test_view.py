@@ -20,6 +20,7 @@ from websockets.exceptions import InvalidStatus
 from websockets.sync.client import connect
 
 from tests.server.daemon.routers.test_sim import ended, save, start, wait_until
+from tests.server.daemon.sim.proc_net import connections_to, listening_addresses
 from tests.web.conftest import browser  # noqa: F401 - Debian's Chromium, the fixture
 
 pytestmark = pytest.mark.e2e
@@ -40,27 +41,6 @@ db.stop(then="brake")
 print("parked")
 time.sleep_ms(600000)
 """
-
-
-def connections_to(port: int) -> int:
-    """Established TCP connections whose server end is 127.0.0.1:port."""
-    count = 0
-    for line in Path("/proc/net/tcp").read_text().splitlines()[1:]:
-        local, _remote, state = line.split()[1:4]
-        if int(local.split(":")[1], 16) == port and state == "01":
-            count += 1
-    return count
-
-
-def listening_addresses(port: int) -> set[str]:
-    """Local addresses of the sockets listening on `port` (IPv4, from /proc/net/tcp)."""
-    found = set()
-    for line in Path("/proc/net/tcp").read_text().splitlines()[1:]:
-        local, _remote, state = line.split()[1:4]
-        address, port_hex = local.split(":")
-        if int(port_hex, 16) == port and state == "0A":
-            found.add(".".join(str(b) for b in reversed(bytes.fromhex(address))))
-    return found
 
 
 def drawn(png: bytes) -> bool:
