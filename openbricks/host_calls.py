@@ -35,18 +35,14 @@ import machine
 
 import openbricks
 from openbricks import _native, launcher, log, pins, tools
+from openbricks.host_limits import MAX_PROGRAM_BYTES, READ_CHUNK_BYTES, READ_FILE_MAX_BYTES
 
 FRAME_PREFIX = "@openbricks:"
 PROTOCOL = 2  # 2: tagged frames (tag(), "program" and "result" frames)
-MAX_PROGRAM_BYTES = 256 * 1024  # staged program ceiling (bytes after decompression)
 SERVO_UART_ID = 1
 SERVO_TX = 14
 SERVO_RX = 41
 SERVO_BAUD = 1000000
-READ_CHUNK_BYTES = 8192  # largest slice of a run log returned by one read_run call
-# Largest slice of a file one read_file call returns: the bytes, their base64 text and the JSON line
-# live side by side on the hub while it prints (~4.7x this), so it stays far below its free RAM.
-READ_FILE_MAX_BYTES = 4096
 _S_IFDIR = 0x4000
 RESET_GRACE_MS = 100  # lets the reset reply drain from the UART/BLE buffers before the chip restarts
 WATCHED_NOTE = "watched: "  # the run log's record of the nonce a watched run's frames carry

@@ -18,12 +18,12 @@ import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
+from openbricks.host_limits import MAX_PROGRAM_BYTES
 from openbricks_server.errors import CliError
 
-# The hub refuses staged programs above this (openbricks.host_calls.MAX_PROGRAM_BYTES); checking here too
-# saves a scan and an upload that could only fail. The hub's own figure (from `info`) is checked again
-# once connected, in case a firmware sets another.
-MAX_PROGRAM_BYTES = 256 * 1024
+# The hub refuses staged programs above MAX_PROGRAM_BYTES; checking here too saves a scan and an
+# upload that could only fail. The hub's own figure (from `info`) is checked again once connected, in
+# case a firmware sets another.
 CODE_FILENAME = "<code>"  # what tracebacks call `run -c` code
 _ERROR_LOCATION = re.compile(r'File "(?P<file>.*)", line (?P<line>\d+)')
 _COMPILE_TIMEOUT_S = 30

@@ -13,6 +13,7 @@ import binascii
 import zlib
 from typing import TYPE_CHECKING
 
+from openbricks.host_limits import READ_FILE_MAX_BYTES
 from openbricks_server.link.errors import LinkDropped, ProtocolError
 from openbricks_server.link.host_call import Command, check_reply, command
 
@@ -29,8 +30,6 @@ DEFAULT_CALL_PAYLOAD_CHARS = 12 * 1024
 ZLIB_WBITS = 11
 # Compression is used when it saves at least this fraction of the bytes on the wire.
 COMPRESSION_MIN_SAVING = 0.05
-# Bytes per read_file call: the hub's own cap (openbricks.host_calls.READ_FILE_MAX_BYTES).
-READ_BLOCK_BYTES = 4096
 
 
 def _any_failed(result) -> bool:
@@ -124,7 +123,7 @@ def _slice(hub: str, path: str, reply: dict, offset: int, total: int | None) -> 
 
 
 async def get(
-    repl: RawRepl, path: str, *, block_bytes: int = READ_BLOCK_BYTES, timeout_s: float | None = None
+    repl: RawRepl, path: str, *, block_bytes: int = READ_FILE_MAX_BYTES, timeout_s: float | None = None
 ) -> bytes:
     """Read file `path` from the hub; see `RawRepl.get`."""
     if block_bytes < 1:

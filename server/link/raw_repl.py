@@ -20,6 +20,7 @@ from collections.abc import Awaitable, Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
+from openbricks.host_limits import READ_FILE_MAX_BYTES
 from openbricks_server.link import file_transfer
 from openbricks_server.link.base import Link
 from openbricks_server.link.errors import HubException, LinkDropped, LinkError, LinkTimeout, ProtocolError
@@ -490,7 +491,7 @@ class RawRepl:
         )
 
     async def get(
-        self, path: str, *, block_bytes: int = file_transfer.READ_BLOCK_BYTES, timeout_s: float | None = None
+        self, path: str, *, block_bytes: int = READ_FILE_MAX_BYTES, timeout_s: float | None = None
     ) -> bytes:
         """Read file `path` from the hub through its `read_file` call, every slice checked by size and
         crc32; the slices after the first are pipelined. A missing file raises HubCallError naming it."""

@@ -23,6 +23,7 @@ import traceback
 import zlib
 from collections.abc import Callable
 
+from openbricks.host_limits import MAX_PROGRAM_BYTES, READ_FILE_MAX_BYTES
 from openbricks_server.link.host_call import FRAME_PREFIX
 from openbricks_sim.virtual_hub.repl import SOFT_REBOOT, Interrupt, ReplProtocol, SoftReboot, cooked
 
@@ -60,8 +61,8 @@ class ScriptedHub:
         self.missing_calls: set[str] = set()
         #: Host calls that fail on this hub, with the exception each reports.
         self.call_failures: dict[str, Exception] = {}
-        #: Most bytes one read_file reply carries (the real hub's READ_FILE_MAX_BYTES).
-        self.read_cap_bytes = 4096
+        #: Most bytes one read_file reply carries (the hub's cap; a test may set a smaller one).
+        self.read_cap_bytes = READ_FILE_MAX_BYTES
         #: What read_file sends instead of a slice's bytes (a damaged link).
         self.corrupt_read: Callable[[bytes], bytes] = lambda data: data
         self._send: Callable[[bytes], None] = lambda data: None
@@ -249,7 +250,7 @@ class _HostCalls:
                 "accepts_mpy": True,
                 "mpy_version": 6,
                 "program_path": "/program.mpy",
-                "max_program_bytes": 256 * 1024,
+                "max_program_bytes": MAX_PROGRAM_BYTES,
                 "compression": list(self.hub.compression),
                 "running": False,
                 "name": self.hub.name,
