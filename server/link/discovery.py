@@ -21,10 +21,9 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from openbricks_server.paths import virtual_hubs_dir
+from openbricks_sim.virtual_hub.endpoint import CONTROL_SOCKET, LOCK_FILE
+from openbricks_sim.virtual_hub.endpoint import FILE_NAME as ENDPOINT_FILE
 
-LOCK_FILE = "hub.lock"  # openbricks_sim.virtual_hub.hub.LOCK_FILE
-CONTROL_SOCKET = "control.sock"  # openbricks_sim.virtual_hub.control.SOCKET_NAME
-ENDPOINT_FILE = "endpoint.json"  # openbricks_sim.virtual_hub.endpoint.FILE_NAME
 STATUS_TIMEOUT_S = 5.0  # a hub still booting answers late; a dead one does not hold its lock
 
 

@@ -22,7 +22,7 @@ import threading
 from ..job import CHASSIS_NAMES, add_seed_argument
 from ..limits import DEFAULT_MEMORY_MB, contain
 from . import endpoint
-from .control import SOCKET_NAME, ControlServer
+from .control import ControlServer
 from .hub import HubBusyError, HubConfig, VirtualHub
 from .hub_fs import DEFAULT_CAPACITY_BYTES
 from .repl import DEFAULT_PASTE_WINDOW
@@ -127,7 +127,7 @@ def main(argv=None):
         port.close()
         print(f"virtual hub {args.name}: {exc}", file=sys.stderr)
         return 2
-    control = ControlServer(hub, os.path.join(directory, SOCKET_NAME)).start()
+    control = ControlServer(hub, os.path.join(directory, endpoint.CONTROL_SOCKET)).start()
     hub.control_path = control.path
     contain(memory_mb=args.memory_mb)
 

@@ -18,7 +18,8 @@ import socketserver
 import tempfile
 import threading
 
-SOCKET_NAME = "control.sock"
+from .endpoint import CONTROL_SOCKET
+
 MAX_LINE_BYTES = 4096
 MAX_SOCKET_PATH_BYTES = 100  # AF_UNIX paths are capped near 108 bytes
 
@@ -47,7 +48,7 @@ class ControlServer:
         if len(os.fsencode(self.path)) > MAX_SOCKET_PATH_BYTES:
             # A deep hub directory: the socket goes to a private temp dir (announced and in status).
             self._temp_dir = tempfile.mkdtemp(prefix="openbricks-vhub-")
-            self.path = os.path.join(self._temp_dir, SOCKET_NAME)
+            self.path = os.path.join(self._temp_dir, CONTROL_SOCKET)
         if os.path.exists(self.path):
             os.remove(self.path)  # left by a hub that was killed; the directory lock says it is ours now
         self._server = _Server(self.path, _Handler)

@@ -13,7 +13,11 @@ never half of one) and removed when the hub stops.
 import json
 import os
 
+# The hub directory as discovery (openbricks_server.link.discovery) reads it: the record, the lock a
+# running hub holds (hub.py), and its control socket's usual place (control.py).
 FILE_NAME = "endpoint.json"
+LOCK_FILE = "hub.lock"
+CONTROL_SOCKET = "control.sock"
 FORMAT = 1
 
 

@@ -27,6 +27,7 @@ from ..python_cost import PythonCost
 from ..shim import micropython as shim_micropython
 from . import frozen
 from .console import ConsoleIn, ConsoleOut, make_input
+from .endpoint import LOCK_FILE
 from .gate import InterruptGate
 from .hub_fs import DEFAULT_CAPACITY_BYTES, HubFS
 from .hub_python import HubPython
@@ -41,7 +42,6 @@ NVS_KEY_HUB_NAME = "hub_name"
 NVS_KEY_BLE_ENABLED = "ble_enabled"
 FLASH_DIR = "flash"
 NVS_FILE = "nvs.json"
-LOCK_FILE = "hub.lock"
 
 
 _END_OF_LINK = object()  # queued by the reader when the link ends

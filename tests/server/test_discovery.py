@@ -107,13 +107,3 @@ def test_the_registry_is_where_the_simulator_puts_its_hubs(data_dir):
     from openbricks_sim.virtual_hub.__main__ import hubs_dir
 
     assert str(virtual_hubs_dir()) == hubs_dir()
-
-
-def test_the_file_names_match_the_simulators():
-    from openbricks_sim.virtual_hub import control, endpoint, hub
-
-    assert (discovery.LOCK_FILE, discovery.CONTROL_SOCKET, discovery.ENDPOINT_FILE) == (
-        hub.LOCK_FILE,
-        control.SOCKET_NAME,
-        endpoint.FILE_NAME,
-    )
