@@ -10,20 +10,13 @@ import time
 
 import pytest
 
-from tests.server.commands.conftest import HubProcess
+from tests.server.commands.conftest import board  # noqa: F401 - the fixture
 from tests.server.flash.conftest import fake_esptool  # noqa: F401 - the fixture
 from tests.server.flash.images import build_image
 from tests.web.conftest import screenshot
 from tests.web.console_process import start_console, stop_console
 
 pytestmark = pytest.mark.e2e
-
-
-@pytest.fixture
-def board(tmp_path):
-    hub = HubProcess("Board01", tmp_path / "boards")
-    yield hub
-    hub.stop()
 
 
 @pytest.fixture
@@ -42,7 +35,12 @@ def hub_status(console, hub_id: str) -> str:
         return api.get(f"/api/hubs/{hub_id}").json()["status"]
 
 
-def test_flash_two_ports_from_the_page_one_succeeds_one_fails_alone(usb_console, board, page_for, tmp_path):
+def test_flash_two_ports_from_the_page_one_succeeds_one_fails_alone(
+    usb_console,
+    board,  # noqa: F811 - the fixture, used
+    page_for,
+    tmp_path,
+):
     hub_id = "serial:" + board.pty.removeprefix("/dev/").replace("/", "-")
     image = tmp_path / "firmware.bin"
     image.write_bytes(build_image("esp32s3", version="2.8.0"))

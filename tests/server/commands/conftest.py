@@ -204,3 +204,11 @@ def hub(data_dir):
 @pytest.fixture
 def env(hub):
     return hub.env
+
+
+@pytest.fixture
+def board(tmp_path):
+    """A hub of its own for one test, as a board on a USB port is: its pty stands in for the port."""
+    process = HubProcess("Board01", tmp_path / "boards")
+    yield process
+    process.stop()

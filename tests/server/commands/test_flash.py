@@ -9,16 +9,9 @@ import pytest
 from openbricks_server.flash import signing
 
 from ..flash.images import build_image
-from .conftest import HubProcess, cli, console_holding
+from .conftest import cli, console_holding
 
 pytestmark = pytest.mark.e2e
-
-
-@pytest.fixture
-def board(tmp_path):
-    hub = HubProcess("FreshBoard", tmp_path / "data")
-    yield hub
-    hub.stop()
 
 
 @pytest.fixture
