@@ -158,7 +158,8 @@ def test_a_stored_program_runs_by_name_and_a_button_run_reaches_the_history(daem
         assert [ln["text"] for ln in lines] == ["stored one"]
         wait_idle(api, ["SimHub-1"])
         identified = api.post("/api/hubs/SimHub-1/identify", json={"duration_ms": 1000})
-        assert identified.status_code == 200 and identified.json()["identify_ms"] == 1000
+        assert identified.status_code == 200, identified.text
+        assert identified.json()["identify_ms"] == 1000
         logs = api.get("/api/hubs/SimHub-1/logs").json()
         assert [entry["index"] for entry in logs] == [0, 1] and all(entry["bytes"] > 0 for entry in logs)
         read = api.get("/api/hubs/SimHub-1/logs/1").json()
