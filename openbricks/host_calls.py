@@ -35,9 +35,8 @@ import machine
 
 import openbricks
 from openbricks import _native, launcher, log, pins, tools
-from openbricks.host_limits import MAX_PROGRAM_BYTES, READ_CHUNK_BYTES, READ_FILE_MAX_BYTES
+from openbricks.host_protocol import FRAME_PREFIX, MAX_PROGRAM_BYTES, READ_CHUNK_BYTES, READ_FILE_MAX_BYTES
 
-FRAME_PREFIX = "@openbricks:"
 PROTOCOL = 2  # 2: tagged frames (tag(), "program" and "result" frames)
 SERVO_UART_ID = 1
 SERVO_TX = 14

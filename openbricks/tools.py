@@ -4,9 +4,9 @@ import json
 import time
 
 from openbricks import estop
+from openbricks.host_protocol import FRAME_PREFIX
 
 PLOT_NAME_MAX = 40
-FRAME_PREFIX = "@openbricks:"
 # The nonce of the host watching this run (the console daemon hands one over with `run`/`idle`), or
 # None: a plot line carries it, so output a program prints itself never turns into a sample.
 _plot_tag = [None]

@@ -18,7 +18,7 @@ import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
-from openbricks.host_limits import MAX_PROGRAM_BYTES
+from openbricks.host_protocol import MAX_PROGRAM_BYTES
 from openbricks_server.errors import CliError
 
 # The hub refuses staged programs above MAX_PROGRAM_BYTES; checking here too saves a scan and an

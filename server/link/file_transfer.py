@@ -13,7 +13,7 @@ import binascii
 import zlib
 from typing import TYPE_CHECKING
 
-from openbricks.host_limits import READ_FILE_MAX_BYTES
+from openbricks.host_protocol import READ_FILE_MAX_BYTES
 from openbricks_server.link.errors import LinkDropped, ProtocolError
 from openbricks_server.link.host_call import Command, check_reply, command
 

@@ -20,9 +20,10 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
+from openbricks import host_protocol
 from openbricks_server.link.errors import HubCallError, ProtocolError
 
-FRAME_PREFIX = b"@openbricks:"
+FRAME_PREFIX = host_protocol.FRAME_PREFIX.encode()
 CTRL_D = b"\x04"
 TAG_BYTES = 4  # 8 hex digits of nonce per command: no program output will carry it by chance
 MAX_FRAME_BYTES = 1 << 20

@@ -20,7 +20,7 @@ from collections.abc import Awaitable, Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
-from openbricks.host_limits import READ_FILE_MAX_BYTES
+from openbricks.host_protocol import READ_FILE_MAX_BYTES
 from openbricks_server.link import file_transfer
 from openbricks_server.link.base import Link
 from openbricks_server.link.errors import HubException, LinkDropped, LinkError, LinkTimeout, ProtocolError

@@ -21,9 +21,9 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass
 
+from openbricks.host_protocol import FRAME_PREFIX
 from openbricks_server.daemon.hub_events import OutputLine, RunOutcome, TelemetrySample
 
-FRAME_PREFIX = "@openbricks:"
 _HEADER = re.compile(r"^-- run_(\d+) --$")
 # Lines the launcher writes to the log only (never to the console): not the program's output.
 _FRAMING = ("started: ", "stopped: ", "button pressed -> stop", "estop engaged", "watcher tick starved")

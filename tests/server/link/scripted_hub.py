@@ -23,8 +23,7 @@ import traceback
 import zlib
 from collections.abc import Callable
 
-from openbricks.host_limits import MAX_PROGRAM_BYTES, READ_FILE_MAX_BYTES
-from openbricks_server.link.host_call import FRAME_PREFIX
+from openbricks.host_protocol import FRAME_PREFIX, MAX_PROGRAM_BYTES, READ_FILE_MAX_BYTES
 from openbricks_sim.virtual_hub.repl import SOFT_REBOOT, Interrupt, ReplProtocol, SoftReboot, cooked
 
 BANNER = (
@@ -218,8 +217,7 @@ class _HostCalls:
         self._tag = str(nonce)
 
     def _frame(self, kind: str, payload: str = "") -> None:
-        prefix = FRAME_PREFIX.decode()
-        self.hub._stdout(f"{prefix}{self._tag} {kind}" + (f" {payload}" if payload else "") + "\n")
+        self.hub._stdout(f"{FRAME_PREFIX}{self._tag} {kind}" + (f" {payload}" if payload else "") + "\n")
 
     def _reply(self, result: dict) -> dict:
         self._frame("result", json.dumps(result))
