@@ -21,6 +21,7 @@ prints the result as JSON; `openbricks sim run` starts it (run_process.py).
 import _thread
 import argparse
 import contextlib
+import gc
 import io
 import json
 import os
@@ -113,6 +114,9 @@ class ProgramRun:
                 PythonCost(sim.clock),
             ):
                 sys.stdout = sys.stderr = output
+                # MuJoCo, the world and the runtime are built: out of the collector's reach, each
+                # collection the program's allocations start no longer walks all of them again.
+                gc.freeze()
                 if watchdog is not None:
                     watchdog.start()
                 try:
