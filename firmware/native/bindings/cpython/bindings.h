@@ -24,6 +24,9 @@ int ob_py_add_capi(PyObject *module);
 int ob_py_add_serial_bus(PyObject *module);
 
 #include "drivebase.h"
+#include "imu_yaw.h"
+/* seed_bias(bias_dps) of an ImuYaw or an ICM45686, which holds one (py_imu_yaw.c). */
+PyObject *ob_py_imu_yaw_seed_bias(ob_imu_yaw_t *yaw, PyObject *args);
 /* 1 and *source filled when obj is an openbricks_native.ICM45686 (a DriveBase reads its heading in C). */
 int ob_py_icm45686_heading_source(PyObject *obj, ob_heading_source_t *source);
 

@@ -213,21 +213,7 @@ static PyObject *icm45686_reset_heading(PyObject *self, PyObject *args) {
 }
 
 static PyObject *icm45686_seed_bias(PyObject *self, PyObject *args) {
-    double bias_dps;
-    if (!PyArg_ParseTuple(args, "d:seed_bias", &bias_dps)) {
-        return NULL;
-    }
-    ob_imu_yaw_t *yaw = &((ICM45686Object *)self)->imu.yaw;
-    if (!ob_imu_yaw_seed_bias(yaw, (float)bias_dps)) {
-        char msg[200];
-        PyOS_snprintf(msg, sizeof msg,
-                      "seed_bias(%g): a gyro bias must be finite and within +-%g deg/s (max_bias_dps); "
-                      "the stored calibration looks corrupt, recalibrate at rest",
-                      bias_dps, (double)yaw->cfg.max_bias_dps);
-        PyErr_SetString(PyExc_ValueError, msg);
-        return NULL;
-    }
-    Py_RETURN_NONE;
+    return ob_py_imu_yaw_seed_bias(&((ICM45686Object *)self)->imu.yaw, args);
 }
 
 static PyObject *icm45686_gyro(PyObject *self, PyObject *unused) {

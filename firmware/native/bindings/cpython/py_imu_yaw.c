@@ -114,12 +114,11 @@ static PyObject *imu_yaw_reset_heading(PyObject *self, PyObject *args) {
     Py_RETURN_NONE;
 }
 
-static PyObject *imu_yaw_seed_bias(PyObject *self, PyObject *args) {
+PyObject *ob_py_imu_yaw_seed_bias(ob_imu_yaw_t *yaw, PyObject *args) {
     double bias_dps;
     if (!PyArg_ParseTuple(args, "d:seed_bias", &bias_dps)) {
         return NULL;
     }
-    ob_imu_yaw_t *yaw = &((ImuYawObject *)self)->yaw;
     if (!ob_imu_yaw_seed_bias(yaw, (float)bias_dps)) {
         char msg[200];
         PyOS_snprintf(msg, sizeof msg,
@@ -130,6 +129,10 @@ static PyObject *imu_yaw_seed_bias(PyObject *self, PyObject *args) {
         return NULL;
     }
     Py_RETURN_NONE;
+}
+
+static PyObject *imu_yaw_seed_bias(PyObject *self, PyObject *args) {
+    return ob_py_imu_yaw_seed_bias(&((ImuYawObject *)self)->yaw, args);
 }
 
 static PyMethodDef imu_yaw_methods[] = {
