@@ -308,6 +308,55 @@ def test_a_dropped_event_stream_resumes_without_losing_or_repeating_a_line(conso
         context.close()
 
 
+SHOWN_LAST = (
+    "([name, word]) => Math.max(-1, ...[...(document.querySelector("
+    "`[data-testid=output-pane][data-hub='${name}'] [data-testid=terminal]`)?.innerText ?? '')"
+    ".matchAll(new RegExp(word + ' (\\\\d+)', 'g'))].map((m) => +m[1]))"
+)
+
+
+BUSY = """from openbricks.tools import wait
+
+i = 0
+while True:
+    print("busy", i)
+    i += 1
+    wait(20)
+"""
+
+
+def test_a_terminal_follows_until_its_reader_scrolls_up(console, page_for):
+    """Regression: a scroll the view did not get from its reader (its own redraw's, the browser's) made
+    it stop following for good; only the wheel, a key, a drag or a touch may let go of the bottom."""
+    page = page_for(console.url)
+    name = console.wait_hubs_idle(2)[0]["name"]
+    open_program(page, "busy.py", BUSY)
+    page.locator("label.target", has_text=name).locator("input").check()
+    page.click("[data-testid=run]")
+    page.goto(page.url.split("#")[0] + "#/output")
+    pane = page.locator(f"[data-testid=output-pane][data-hub='{name}']")
+    scroller = pane.locator("[data-testid=terminal] > div").first
+    try:
+        # Enough lines to scroll: more than the pane has rows.
+        page.wait_for_function("(el) => el.scrollHeight > 2 * el.clientHeight", arg=scroller.element_handle())
+        # A scroll nobody asked for: the view goes back to the bottom and keeps following.
+        scroller.evaluate("(el) => { el.scrollTop = 0; }")
+        seen = page.evaluate(SHOWN_LAST, [name, "busy"])
+        page.wait_for_function(f"(n) => ({SHOWN_LAST})(n) >= {seen + 10}", arg=[name, "busy"])
+        # The reader turns the wheel up: the view holds still while the hub goes on printing.
+        scroller.hover()
+        page.mouse.wheel(0, -3000)
+        page.wait_for_timeout(700)
+        held = page.evaluate(SHOWN_LAST, [name, "busy"])
+        page.wait_for_timeout(1500)
+        assert page.evaluate(SHOWN_LAST, [name, "busy"]) == held, "scrolled up, yet it moved on"
+        # Back down to the bottom: following again.
+        page.mouse.wheel(0, 100000)
+        page.wait_for_function(f"(n) => ({SHOWN_LAST})(n) >= {held + 10}", arg=[name, "busy"])
+    finally:
+        page.click("[data-testid=stop-all]")
+
+
 PLOTTING = """from openbricks.tools import plot, wait
 
 for i in range(40):
