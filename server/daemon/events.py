@@ -55,9 +55,13 @@ class Subscriber:
             self.behind = self.overflowed = True
             self.resyncs += 1
 
-    async def pump(self, send: Callable[[list[str]], Awaitable[None]]) -> None:
+    async def pump(self, send: Callable[[list[str]], Awaitable[None]], pace_s: float = 0.0) -> None:
         """Send this client its events forever, in order, catching up whenever it is behind. Whatever is
-        queued goes out in one `send` call (fewer wake-ups when output is dense)."""
+        queued goes out in one `send` call (fewer wake-ups when output is dense). With `pace_s`, a send
+        follows the previous one by at least that long, so what arrives meanwhile goes out together: a
+        browser pays for every message it is handed, and draws at most once per display frame anyway."""
+        loop = asyncio.get_running_loop()
+        sent_at = -pace_s
         while True:
             if self.behind and self.queue.empty():
                 if self.overflowed:
@@ -71,9 +75,12 @@ class Subscriber:
                 await self._catch_up(send)
                 continue
             batch = [await self.queue.get()]
+            if pace_s:
+                await asyncio.sleep(sent_at + pace_s - loop.time())
             while len(batch) < SEND_BATCH and not self.queue.empty():
                 batch.append(self.queue.get_nowait())
             await send([text for _, text in batch])
+            sent_at = loop.time()
             self.last_seq = batch[-1][0]
 
     async def _catch_up(self, send: Callable[[list[str]], Awaitable[None]]) -> None:

@@ -22,6 +22,10 @@ class HandSocket implements StreamSocket {
   push(e: Partial<Envelope>) {
     this.onmessage?.({ data: JSON.stringify({ hub: null, run: null, ts: 0, data: {}, ...e }) });
   }
+  /** Several envelopes in one frame, as the daemon sends them when asked for `batch_ms`. */
+  pushFrame(es: Partial<Envelope>[]) {
+    this.onmessage?.({ data: JSON.stringify(es.map((e) => ({ hub: null, run: null, ts: 0, data: {}, ...e }))) });
+  }
   drop(code = 1006) {
     this.onclose?.({ code, reason: "" });
   }
@@ -73,6 +77,20 @@ describe("EventStream", () => {
     expect(h.events.map((e) => e.seq)).toEqual([1, 2, 3, 4, 5]);
     expect(h.refetches).toEqual([]);
     expect(h.stream.state).toBe("live");
+  });
+
+  it("takes a frame of several envelopes one by one, in order, with overlaps and jumps judged inside it", () => {
+    const h = harness();
+    h.stream.start();
+    h.sockets[0].open();
+    h.sockets[0].pushFrame([{ seq: null as unknown as number, type: "hello", data: { boot: "B1", seq: 0, resume_from: 0 } }, { seq: 1, type: "hub" }, { seq: 2, type: "output" }]);
+    h.sockets[0].pushFrame([{ seq: 2, type: "output" }, { seq: 3, type: "output" }, { seq: 6, type: "output" }]);
+    expect(h.events.map((e) => e.seq)).toEqual([1, 2, 3, 6]);
+    expect(h.refetches).toHaveLength(1);
+    expect(h.refetches[0]).toMatchObject({ reason: "gap", from: 4, to: 5 });
+    expect(h.stream.boot).toBe("B1");
+    h.sockets[0].onmessage?.({ data: "[{not json" });
+    expect(h.stream.malformed).toBe(1);
   });
 
   it("starts counting from the hello when it connects fresh", () => {

@@ -1,10 +1,13 @@
-"""The event stream's WebSocket: `/api/events?since=SEQ&boot=BOOT`.
+"""The event stream's WebSocket: `/api/events?since=SEQ&boot=BOOT&batch_ms=MS`.
 
 The server sends envelopes `{"seq", "type", "hub", "run", "ts", "data"}` (see
-`openbricks_server.daemon.events`). A client may send commands as JSON objects
-`{"cmd": NAME, "id": ANY, ...}`; each gets a `reply` (`{"id", "cmd", "ok", "result" | "error"}`), and
-garbage gets a reply with an error, never a dropped connection. Commands are registered with
-`ws_command`; a mutating one goes through the same role check and audit as the REST routes.
+`openbricks_server.daemon.events`), one per text frame; with `batch_ms`, each frame is instead a JSON
+array of the envelopes ready then, at most one frame every `batch_ms` (the browser console asks for
+one a display frame: ten busy hubs are a thousand messages a second, each a task for the page).
+A client may send commands as JSON objects `{"cmd": NAME, "id": ANY, ...}`; each gets a `reply`
+(`{"id", "cmd", "ok", "result" | "error"}`), and garbage gets a reply with an error, never a dropped
+connection. Commands are registered with `ws_command`; a mutating one goes through the same role check
+and audit as the REST routes.
 """
 
 from __future__ import annotations
@@ -66,6 +69,13 @@ async def events(
     websocket: WebSocket,
     since: int | None = Query(None, ge=0, description="the last seq this client received"),
     boot: str | None = Query(None, max_length=64, description="the boot id of that seq (from hello)"),
+    batch_ms: int | None = Query(
+        None,
+        ge=1,
+        le=1000,
+        description="send JSON arrays of envelopes, at most one frame per this many ms (omitted: one "
+        "envelope per frame, each as soon as it happens)",
+    ),
 ):
     bus = websocket.app.state.ctx.events
     caller: Caller = websocket.scope["state"]["caller"]
@@ -75,6 +85,9 @@ async def events(
 
     async def send(texts: list[str]) -> None:
         async with lock, asyncio.timeout(SEND_TIMEOUT_S):
+            if batch_ms:
+                await websocket.send_text(f"[{','.join(texts)}]")
+                return
             for text in texts:
                 await websocket.send_text(text)
 
@@ -83,7 +96,7 @@ async def events(
 
     try:
         await send(first)
-        pump = asyncio.create_task(subscriber.pump(send), name="events-pump")
+        pump = asyncio.create_task(subscriber.pump(send, (batch_ms or 0) / 1000), name="events-pump")
         try:
             await _serve_commands(websocket, caller, reply)
         finally:

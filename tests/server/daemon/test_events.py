@@ -165,6 +165,44 @@ def test_a_slow_client_is_resynced_while_a_fast_one_keeps_up(tmp_path):
     assert seqs == list(range(first, first + total))
 
 
+def test_a_client_asking_for_batches_gets_every_event_in_order_in_few_frames(daemon):
+    """`batch_ms`: frames are arrays of envelopes, at most one per interval, and nothing is lost."""
+    with daemon.websocket("batch_ms=100") as ws:
+        hello = json.loads(ws.recv(timeout=30))
+        assert [m["type"] for m in hello] == ["hello"]
+        run = start_run(daemon)
+        total = 2 + 200  # the hub's status and the run's start, then its lines
+        t0 = time.monotonic()
+        writer = threading.Thread(target=emit, args=(daemon, run, 1, 200))
+        writer.start()
+        frames, events = 0, []
+        while len(events) < total:
+            frame = json.loads(ws.recv(timeout=30))
+            assert isinstance(frame, list) and frame, "each frame is a non-empty array of envelopes"
+            frames += 1
+            events += [m for m in frame if m["seq"] is not None]
+        elapsed = time.monotonic() - t0
+        writer.join()
+        ws.send(json.dumps({"cmd": "ping", "id": "p"}))
+        reply = json.loads(ws.recv(timeout=30))
+    seqs = [e["seq"] for e in events]
+    assert seqs == list(range(seqs[0], seqs[0] + total))
+    lines = [ln["line_no"] for e in events if e["type"] == "output" for ln in e["data"]["lines"]]
+    assert lines == list(range(1, 201))
+    assert frames <= elapsed / 0.1 + 2, f"{frames} frames in {elapsed:.2f} s at one per 100 ms"
+    assert [m["type"] for m in reply] == ["reply"] and reply[0]["data"]["ok"]
+
+
+@pytest.mark.parametrize("query", ["batch_ms=0", "batch_ms=5000"])
+def test_a_batch_interval_out_of_range_is_refused(daemon, query):
+    from websockets.exceptions import InvalidStatus
+
+    with pytest.raises(InvalidStatus) as refused:
+        with daemon.websocket(query):
+            pass
+    assert refused.value.response.status_code in (403, 422)
+
+
 def test_garbage_from_a_client_gets_an_error_reply_and_the_stream_goes_on(daemon):
     with daemon.websocket() as ws:
         recv(ws)

@@ -152,15 +152,23 @@ export class EventStream {
     }, delay);
   }
 
-  /** One message off the wire: parse, order, deduplicate, dispatch. Public for tests and benchmarks. */
+  /**
+   * One frame off the wire: an envelope, or (asked for with `batch_ms`) an array of them in order. Each
+   * is parsed, ordered, deduplicated and dispatched. Public for tests and benchmarks.
+   */
   receive(raw: unknown): void {
-    let e: Envelope;
+    let parsed: unknown;
     try {
-      e = typeof raw === "string" ? JSON.parse(raw) : (raw as Envelope);
+      parsed = typeof raw === "string" ? JSON.parse(raw) : raw;
     } catch {
       this.malformed += 1;
       return;
     }
+    if (Array.isArray(parsed)) for (const e of parsed) this.handle(e as Envelope);
+    else this.handle(parsed as Envelope);
+  }
+
+  private handle(e: Envelope): void {
     if (!e || typeof e !== "object" || typeof e.type !== "string") {
       this.malformed += 1;
       return;

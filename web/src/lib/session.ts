@@ -7,9 +7,13 @@ import { query, wsUrl } from "./api";
 import { consoleModel as model } from "./console.svelte";
 import { EventStream } from "./events";
 
+// The stream in frames of every event ready, one a display frame: ten hubs printing 100 lines a second
+// each are a thousand messages a second, and the page pays for each message it is handed.
+const BATCH_MS = 16;
+
 export function startSession(): () => void {
   const stream = new EventStream({
-    url: (since, boot) => wsUrl(`/api/events${query({ since, boot })}`),
+    url: (since, boot) => wsUrl(`/api/events${query({ since, boot, batch_ms: BATCH_MS })}`),
     handlers: {
       event: (e) => model.applyEvent(e),
       refetch: (r) => void model.refetch(r),
