@@ -1,10 +1,12 @@
 """Competition mode: while it is on and any hub runs a program, nothing new is put on a hub or started
-(no upload, no run on any hub, no sim run or sweep), so a stray click, a second laptop's page or a
-script cannot change a robot in the middle of a match. Stopping always works. It also holds the match
-timer, so every page watching the console (a judge's, a mentor's) shows the same clock.
+(no upload, no run on any hub, no sim run or sweep, no flashing, no servo re-ID), so a stray click, a
+second laptop's page or a script cannot change a robot in the middle of a match. Stopping always
+works. It also holds the match timer, so every page watching the console (a judge's, a mentor's) shows
+the same clock.
 
 The daemon enforces the lock (the page only mirrors it, greying its controls out with the same reason):
-routes that start or upload depend on `unlocked(...)`, which refuses with 409 `competition_locked`.
+routes that start, upload, flash or re-ID depend on `unlocked(...)`, which refuses with 409
+`competition_locked`.
 It is a guard against accidents, not a permission: any operator may turn it off, and the audit log
 says who did. The setting is kept in the database, so a console restarted mid-competition comes back
 locked as it was.
@@ -93,7 +95,8 @@ class Competition:
         verb = "is" if len(running) == 1 else "are"
         raise ApiError.conflict(
             "competition_locked",
-            f"cannot {what}: competition mode locks uploads and new runs while a hub runs, and {names} "
+            f"cannot {what}: competition mode locks uploads, new runs, flashing and servo re-ID while a hub "
+            f"runs, and {names} "
             f"{verb} running",
             "wait for the run to end or stop it (stop and STOP ALL always work); an operator can turn "
             'competition mode off with PUT /api/competition {"on": false}',
@@ -102,9 +105,9 @@ class Competition:
 
 
 def unlocked(what: str):
-    """A dependency for a route that uploads to a hub or starts a run: the operator check (so a viewer
-    is refused with 403 first), then the competition lock. `what` names the action in the refusal
-    ("upload a program"), followed by the hub the route addresses, if any."""
+    """A dependency for a route that puts something on a hub or a servo, or starts a run: the operator
+    check (so a viewer is refused with 403 first), then the competition lock. `what` names the action
+    in the refusal ("upload a program"), followed by the hub the route addresses, if any."""
 
     async def competition_unlocked(request: Request, caller: Caller = Depends(require_operator)) -> Caller:
         ctx = request.app.state.ctx

@@ -437,6 +437,12 @@ def _competition_mode_locks_uploads(console, page_for, page, name, other):
     assert page.is_disabled("[data-testid=run]")
     assert "Competition mode" in (page.get_attribute("[data-testid=run]", "title") or "")
     screenshot(page, "editor-competition-locked")
+    # Flashing and servo re-ID wait too (scanning, which changes nothing, does not).
+    for route, button in (("flash", "Flash selected"), ("servo", "Change id")):
+        page.goto(page.url.split("#")[0] + f"#/{route}")
+        page.locator("[data-testid=readonly-reason]", has_text="Competition mode").wait_for()
+        locked = page.get_by_role("button", name=button)
+        assert locked.is_disabled() and "Competition mode" in (locked.get_attribute("title") or ""), route
     # What the page greys out, the daemon refuses: a script cannot upload to the other hub either.
     with console.api() as api:
         refused = api.post(f"/api/hubs/{other}/upload", json={"program": "forever.py"})

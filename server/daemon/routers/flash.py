@@ -15,6 +15,7 @@ from fastapi import APIRouter, Depends, Query, Request
 from pydantic import BaseModel, Field
 
 from openbricks_server.daemon.auth import Caller, require_operator, require_viewer
+from openbricks_server.daemon.competition import unlocked
 from openbricks_server.daemon.errors import ApiError
 from openbricks_server.daemon.hubs.errors import HubOperationError
 from openbricks_server.daemon.jobs.flash import MAX_FIRMWARE_BYTES, FlashTarget, hubs_by_port
@@ -25,6 +26,7 @@ from openbricks_server.flash.flasher import validate_hub_name
 router = APIRouter(prefix="/flash", tags=["flash"], dependencies=[Depends(require_viewer)])
 
 MAX_TARGETS = 64
+FLASH_ALLOWED = Depends(unlocked("flash firmware"))  # operators, unless competition mode locks it
 
 
 class Target(BaseModel):
@@ -161,9 +163,7 @@ async def upload_firmware(
 
 
 @router.post("", response_model=FlashStarted)
-async def start_flash(
-    body: FlashBody, request: Request, caller: Caller = Depends(require_operator)
-) -> FlashStarted:
+async def start_flash(body: FlashBody, request: Request, caller: Caller = FLASH_ALLOWED) -> FlashStarted:
     """Flash every target at once (one job per port; at most the console's limit run together, the rest
     wait their turn). Answers at once with the jobs; follow them on the event stream or GET each one."""
     flash = _flash(request)

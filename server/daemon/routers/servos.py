@@ -12,6 +12,7 @@ from fastapi import APIRouter, Depends, Request
 from pydantic import BaseModel, Field, model_validator
 
 from openbricks_server.daemon.auth import Caller, require_operator, require_viewer
+from openbricks_server.daemon.competition import unlocked
 from openbricks_server.daemon.errors import ApiError
 from openbricks_server.daemon.jobs.servos import ServoBus, ServoJobs
 from openbricks_server.daemon.routers.hub_lookup import find_hub, hub_errors
@@ -19,6 +20,7 @@ from openbricks_server.daemon.routers.jobs import registry
 from openbricks_server.errors import CliError
 
 router = APIRouter(prefix="/servos", tags=["servos"], dependencies=[Depends(require_viewer)])
+SET_ID_ALLOWED = Depends(unlocked("change a servo's id"))  # operators, unless competition mode locks it
 
 
 class BusBody(BaseModel):
@@ -91,7 +93,7 @@ async def scan(body: BusBody, request: Request, caller: Caller = Depends(require
 
 
 @router.post("/set-id", response_model=SetIdOut)
-async def set_id(body: SetIdBody, request: Request, caller: Caller = Depends(require_operator)) -> SetIdOut:
+async def set_id(body: SetIdBody, request: Request, caller: Caller = SET_ID_ALLOWED) -> SetIdOut:
     """Give one servo `new_id`, verified by reading it back from the new id and the old id falling silent."""
     bus = _bus(request, body)
     with _api_errors():

@@ -80,10 +80,10 @@ export class ConsoleModel {
         : null,
   );
 
-  /** Uploads and new runs are refused in competition mode while a run is on. */
+  /** Uploads, new runs, flashing and servo re-ID are refused in competition mode while a run is on. */
   uploadLockReason = $derived(
     this.readOnlyReason ??
-      (this.competition.on && this.anyRunning ? "Competition mode: uploads are locked while a run is on." : null),
+      (this.competition.on && this.anyRunning ? "Competition mode: uploads, runs, flashing and servo re-ID are locked while a run is on." : null),
   );
 
   /** Whether the daemon serves `path` (as written in its OpenAPI schema, e.g. "/api/sim/runs"). */

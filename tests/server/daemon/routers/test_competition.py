@@ -1,7 +1,7 @@
 """Competition mode on a real daemon (uvicorn on 127.0.0.1): the setting and its match timer are the
 daemon's (every page sees them, a restart keeps them), and while the mode is on and a hub runs, the API
-itself refuses uploads and new runs (hub, sim, sweep) with 409 and the reason, whoever sends them, while
-stop and STOP ALL still work."""
+itself refuses uploads, new runs (hub, sim, sweep), flashing and servo re-ID with 409 and the reason,
+whoever sends them, while stop and STOP ALL still work."""
 
 from __future__ import annotations
 
@@ -101,6 +101,12 @@ def test_while_a_hub_runs_uploads_and_new_runs_are_refused_by_the_api_and_stop_s
                 ),
                 "start a sim run": api.post("/api/sim/runs", json={"program": "square.py"}),
                 "start a sweep": api.post("/api/sim/sweeps", json={"program": "square.py", "seeds": "1-3"}),
+                "flash firmware": api.post(
+                    "/api/flash", json={"targets": [{"port": "/dev/ttyUSB9", "name": "B"}]}
+                ),
+                "change a servo's id": api.post(
+                    "/api/servos/set-id", json={"port": "/dev/ttyUSB9", "new_id": 3}
+                ),
             }
             for what, reply in attempts.items():
                 body = reply.json()
@@ -110,6 +116,7 @@ def test_while_a_hub_runs_uploads_and_new_runs_are_refused_by_the_api_and_stop_s
                 assert "stop" in body["hint"] and body["detail"]["running"] == ["SimHub-1"]
             assert api.get("/api/sim/runs").json() == []  # nothing was started behind the refusal
             assert api.get("/api/sim/sweeps").json() == []
+            assert api.get("/api/jobs").json() == []  # no flash or servo job either
             # A viewer is told about the role, not the lock.
             assert mentor.post("/api/hubs/SimHub-2/upload", json={"program": "square.py"}).status_code == 403
             audited = [(e["action"], e["status"]) for e in api.get("/api/system/audit").json()]
