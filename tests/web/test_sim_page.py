@@ -1,7 +1,8 @@
 """The Simulator page in Debian's Chromium against a real `openbricks console`: a stored program started
 from the page runs in a simulator child process, its 3D view (viser, through the console's port) draws
-in the page, the finished run turns into its replay, and a sweep started from the page reports every
-seed; a viewer can start nothing."""
+in the page with the run's output and telemetry beside it, the finished run turns into its replay (also
+when opened later from the page's list of runs), and a sweep started from the page reports every seed;
+a viewer can start nothing."""
 
 from __future__ import annotations
 
@@ -32,18 +33,33 @@ def test_a_run_started_on_the_page_draws_its_view_then_replays_and_a_sweep_repor
         api.put("/api/programs/drive.py", json={"source": DRIVE}).raise_for_status()
     page = page_for(console.url)
     page.goto(f"{console.base}/#/sim")
-    page.locator("select").select_option("drive.py")
+    page.get_by_label("Program").select_option("drive.py")
+    page.get_by_label("World").select_option("empty")
     page.get_by_role("button", name="Start simulation").click()
 
     view = page.frame_locator("iframe[title='3D view']")
     view.locator("canvas").first.wait_for(timeout=RUN_S)
+    # Beside the view: the run's output, and its pose and wheel speeds plotted as they come.
+    output = page.locator("[data-testid=sim-output]")
+    output.get_by_text("driving").wait_for(timeout=RUN_S)
+    page.locator("[data-testid=sim-telemetry] canvas").first.wait_for(timeout=RUN_S)
     page.get_by_role("link", name="Replay").wait_for(timeout=RUN_S)  # the run ended
     assert "done" in page.locator(".runbar").inner_text()
+    output.get_by_text("arrived").wait_for()
     page.frame_locator("iframe[title='3D view']").locator("canvas").first.wait_for(timeout=RUN_S)
     screenshot(page, "sim-replay")
     with console.api() as api:
         (run,) = api.get("/api/sim/runs").json()
     assert run["exit"] == "finished" and run["program_name"] == "drive.py"
+
+    # A past run, opened from the list on a fresh page: its replay, with its stored output and telemetry.
+    again = page_for(console.sign_in_url(console.token, "sim"))
+    again.locator("[data-testid=sim-runs] tbody tr", has_text="drive.py").click()
+    again.frame_locator("iframe[title='3D view']").locator("canvas").first.wait_for(timeout=RUN_S)
+    again.get_by_role("link", name="Replay").wait_for()
+    again.locator("[data-testid=sim-output]").get_by_text("arrived").wait_for()
+    again.locator("[data-testid=sim-telemetry] .u-legend", has_text="x_mm").wait_for()
+    assert again.errors == [], again.errors
 
     page.fill("input[placeholder='1-50']", "1-2")
     page.get_by_role("button", name="Start sweep").click()
@@ -51,6 +67,11 @@ def test_a_run_started_on_the_page_draws_its_view_then_replays_and_a_sweep_repor
     row.wait_for(timeout=RUN_S)
     page.locator(".sweeps tbody tr", has_text="done").wait_for(timeout=RUN_S)
     assert "100 %" in row.inner_text()
+    # The sweep's seeds, a row each.
+    seeds = page.locator("[data-testid=sweep-rows] tbody tr")
+    seeds.nth(1).wait_for()
+    assert [seeds.nth(i).locator("td").first.inner_text() for i in range(seeds.count())] == ["1", "2"]
+    seeds.nth(1).scroll_into_view_if_needed()
     screenshot(page, "sim-sweep")
     assert page.errors == [], page.errors
 

@@ -2,6 +2,7 @@ import { describe, expect, it } from "vitest";
 import type { Hub, OutputLine } from "../src/lib/api";
 import { ConsoleModel } from "../src/lib/console.svelte";
 import type { Envelope } from "../src/lib/events";
+import { RunTelemetry } from "../src/lib/telemetry";
 
 const hub = (id: string, extra: Partial<Hub> = {}): Hub => ({
   hub_id: id,
@@ -71,6 +72,24 @@ describe("ConsoleModel", () => {
     expect(m.output("a").entries.map((e) => e.text)).toEqual(["l1", "l2", "l3", "l4"]);
   });
 
+  it("shows one run's output alone: what the store has, then its live lines, each once", async () => {
+    let answer: (lines: OutputLine[]) => void = () => {};
+    const m = new ConsoleModel((run: string, after = 0) => {
+      expect([run, after]).toEqual(["S", 0]);
+      return new Promise<OutputLine[]>((resolve) => (answer = resolve));
+    });
+    const out = m.runOutput("S");
+    // Live lines arrive while the store is still being read; one of them the store also has.
+    m.applyEvent(ev("output", "sim", "S", { lines: [line(3), line(4)] }));
+    m.applyEvent(ev("output", "sim", "OTHER", { lines: [line(1)] }));
+    answer([line(1), line(2), line(3)] as OutputLine[]);
+    await settle();
+    await settle();
+    m.applyEvent(ev("run_ended", "sim", "S", { run_id: "S", outcome: "finished", detail: null, ended_ms: 9 }));
+    expect(out.entries.map((e) => e.text)).toEqual(["l1", "l2", "l3", "l4", "■ finished"]);
+    expect(m.runOutput("S")).toBe(out);
+  });
+
   it("keeps telemetry per run", () => {
     const m = new ConsoleModel();
     m.applyEvent(ev("telemetry", "a", "R", { samples: [{ name: "speed", value: 1, hub_ms: 1000, recv_ms: 1000 }, { name: "speed", value: 2, hub_ms: 1500, recv_ms: 1500 }] }));
@@ -106,5 +125,19 @@ describe("ConsoleModel", () => {
     expect(elapsed).toBeLessThan(10000 + 1000);
     m.setCompetition({ on: false, match_s: 120, match_started_ms: null, changed_by: "local", changed_ms: 1, server_ms: 5 });
     expect(m.competition).toEqual({ on: false, matchSeconds: 120, matchStartedMs: null });
+  });
+});
+
+describe("RunTelemetry", () => {
+  it("puts stored samples before the live ones that arrived while they were read, each once", () => {
+    const t = new RunTelemetry();
+    const s = (ms: number, value: number) => ({ name: "x_mm", value, hub_ms: ms, recv_ms: ms });
+    t.hold();
+    t.add([s(2000, 2), s(2500, 3)]); // live, while the store is read
+    expect(t.names()).toEqual([]);
+    t.release([s(1000, 0), s(1500, 1), s(2000, 2)]); // the store has caught up with one of them
+    expect(t.series.get("x_mm")).toEqual({ t: [0, 0.5, 1, 1.5], v: [0, 1, 2, 3] });
+    t.add([s(3000, 4)]);
+    expect(t.series.get("x_mm")?.v).toEqual([0, 1, 2, 3, 4]);
   });
 });

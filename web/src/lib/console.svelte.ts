@@ -39,6 +39,7 @@ export interface Job {
 }
 
 let noticeIds = 0;
+const KEPT_RUN_OUTPUTS = 8;
 
 export class ConsoleModel {
   me = $state<Me | null>(null);
@@ -64,6 +65,8 @@ export class ConsoleModel {
   apiPaths = $state<Set<string> | null>(null);
 
   readonly outputs = new Map<string, HubOutput>();
+  /** Single runs' output, for a page that shows one run (the Simulator's), the newest few kept. */
+  readonly runOutputs = new Map<string, HubOutput>();
   readonly telemetry = new Map<string, RunTelemetry>();
 
   hubList = $derived(Object.values(this.hubs).sort((a, b) => a.name.localeCompare(b.name) || a.hub_id.localeCompare(b.hub_id)));
@@ -100,13 +103,43 @@ export class ConsoleModel {
     return o;
   }
 
-  runTelemetry(runId: string): RunTelemetry {
+  /**
+   * A run's telemetry as it arrives. `stored`: the run may have begun before this page saw it, so what
+   * the daemon kept is read first (live samples wait for it).
+   */
+  runTelemetry(runId: string, stored = false): RunTelemetry {
     let t = this.telemetry.get(runId);
     if (!t) {
       t = new RunTelemetry();
       this.telemetry.set(runId, t);
+      if (stored) {
+        const fresh = t;
+        fresh.hold();
+        fetchRunSamples(runId).then(
+          (samples) => fresh.release(samples),
+          (err) => {
+            fresh.release([]);
+            this.fail(err, "Loading the run's telemetry");
+          },
+        );
+      }
     }
     return t;
+  }
+
+  /** One run's output alone: what the daemon stored of it, then its live lines, in order and once. */
+  runOutput(runId: string): HubOutput {
+    let o = this.runOutputs.get(runId);
+    if (!o) {
+      o = new HubOutput();
+      this.runOutputs.set(runId, o);
+      for (const old of this.runOutputs.keys()) {
+        if (this.runOutputs.size <= KEPT_RUN_OUTPUTS) break;
+        this.runOutputs.delete(old);
+      }
+      void this.fillHole(o, runId, 0);
+    }
+    return o;
   }
 
   notify(kind: Notice["kind"], message: string, hint?: string | null): void {
@@ -175,8 +208,9 @@ export class ConsoleModel {
     // Each open run's output is brought up to date from the store.
     for (const [hubId, out] of this.outputs) {
       const hub = this.hubs[hubId];
-      if (hub?.run_id && out.hasRun(hub.run_id)) void this.fillHole(hubId, hub.run_id, out.lastLine(hub.run_id));
+      if (hub?.run_id && out.hasRun(hub.run_id)) void this.fillHole(out, hub.run_id, out.lastLine(hub.run_id));
     }
+    for (const [run, out] of this.runOutputs) void this.fillHole(out, run, out.lastLine(run));
     this.generation += 1;
   }
 
@@ -217,8 +251,10 @@ export class ConsoleModel {
         const run = e.run;
         if (!hubId || !run) break;
         const lines = (d.lines as OutputLine[]) ?? [d as unknown as OutputLine];
-        const hole = this.output(hubId).append(run, lines);
-        if (hole) void this.fillHole(hubId, run, hole.after);
+        for (const out of [this.output(hubId), this.runOutputs.get(run)]) {
+          const hole = out?.append(run, lines);
+          if (out && hole) void this.fillHole(out, run, hole.after);
+        }
         break;
       }
       case "telemetry":
@@ -239,11 +275,13 @@ export class ConsoleModel {
           this.runs[run].outcome = outcome;
         }
         const hubId = e.hub ?? this.runs[run]?.hub_id;
+        const detail = d.detail ? `: ${d.detail as string}` : "";
+        const kind = outcome === "error" || outcome === "dropped" ? "error" : "note";
         if (hubId) {
           this.lastOutcome[hubId] = outcome;
-          const detail = d.detail ? `: ${d.detail as string}` : "";
-          this.output(hubId).note(`■ ${outcome}${detail}`, run, outcome === "error" || outcome === "dropped" ? "error" : "note");
+          this.output(hubId).note(`■ ${outcome}${detail}`, run, kind);
         }
+        this.runOutputs.get(run)?.note(`■ ${outcome}${detail}`, run, kind);
         break;
       }
       case "program": {
@@ -271,11 +309,11 @@ export class ConsoleModel {
     }
   }
 
-  private async fillHole(hubId: string, run: string, after: number): Promise<void> {
+  private async fillHole(out: HubOutput, run: string, after: number): Promise<void> {
     try {
-      this.output(hubId).fill(run, await this.fetchLines(run, after));
+      out.fill(run, await this.fetchLines(run, after));
     } catch (err) {
-      this.output(hubId).fill(run, []);
+      out.fill(run, []);
       this.fail(err, "Loading missed output");
     }
   }
@@ -292,6 +330,11 @@ export class ConsoleModel {
       matchStartedMs: c.match_started_ms === null ? null : c.match_started_ms + (Date.now() - serverMs),
     };
   }
+}
+
+/** A run's stored telemetry samples. */
+export async function fetchRunSamples(run: string): Promise<TelemetrySample[]> {
+  return api.get<TelemetrySample[]>(`/api/runs/${encodeURIComponent(run)}/telemetry`);
 }
 
 /** Every stored line of `run` after line `after`, page by page. */

@@ -1,6 +1,6 @@
 /** The run history as the daemon keeps it: search, one run with its output, program and telemetry. */
 
-import { api, query, type Run, type TelemetrySample } from "./api";
+import { api, query, type Run } from "./api";
 
 const enc = encodeURIComponent;
 
@@ -28,11 +28,7 @@ export async function getRun(id: string): Promise<RunDetail> {
   return api.get<RunDetail>(`/api/runs/${enc(id)}`);
 }
 
-export { fetchRunLines as runLines } from "./console.svelte";
-
-export async function runSamples(id: string): Promise<TelemetrySample[]> {
-  return api.get<TelemetrySample[]>(`/api/runs/${enc(id)}/telemetry`);
-}
+export { fetchRunLines as runLines, fetchRunSamples as runSamples } from "./console.svelte";
 
 /** Where a run's export lives; the browser downloads it with the session cookie. */
 export function exportUrl(id: string, format: "text" | "json"): string {

@@ -10,11 +10,31 @@ export class RunTelemetry {
   readonly series = new Map<string, { t: number[]; v: number[] }>();
   private t0: number | null = null;
   private readonly listeners = new Set<() => void>();
+  /** Live samples waiting while the stored ones are read (null: none are being read). */
+  private held: TelemetrySample[] | null = null;
   version = 0;
 
   constructor(readonly limit = 20000) {}
 
+  /** A run opened while under way: its stored samples are being read; live ones wait for them. */
+  hold(): void {
+    this.held ??= [];
+  }
+
+  /** The stored samples, then the waiting live ones the store did not have yet, each once and in order. */
+  release(stored: TelemetrySample[]): void {
+    const held = this.held ?? [];
+    this.held = null;
+    const last = new Map<string, number>();
+    for (const s of stored) last.set(s.name, Math.max(last.get(s.name) ?? -Infinity, s.hub_ms ?? s.recv_ms));
+    this.add([...stored, ...held.filter((s) => (s.hub_ms ?? s.recv_ms) > (last.get(s.name) ?? -Infinity))]);
+  }
+
   add(samples: TelemetrySample[]): void {
+    if (this.held) {
+      this.held.push(...samples);
+      return;
+    }
     if (!samples.length) return;
     for (const s of samples) {
       const ms = s.hub_ms ?? s.recv_ms;
