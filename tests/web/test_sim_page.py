@@ -73,6 +73,14 @@ def test_a_run_started_on_the_page_draws_its_view_then_replays_and_a_sweep_repor
     assert [seeds.nth(i).locator("td").first.inner_text() for i in range(seeds.count())] == ["1", "2"]
     seeds.nth(1).scroll_into_view_if_needed()
     screenshot(page, "sim-sweep")
+
+    # Run from the editor with the simulator as its target: the Simulator page opens on that run.
+    page.goto(f"{console.base}/#/editor")
+    page.locator("button.prog", has_text="drive.py").click()
+    page.locator("label.target", has_text="Simulator").locator("input").check()
+    page.click("[data-testid=run]")
+    page.wait_for_url("**/#/sim?run=*")
+    page.locator("[data-testid=sim-output]").get_by_text("arrived").wait_for(timeout=RUN_S)
     assert page.errors == [], page.errors
 
     viewer = page_for(console.sign_in_url(console.mint("viewer"), "sim"))

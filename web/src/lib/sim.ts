@@ -41,6 +41,11 @@ export async function listSimRuns(limit = 20): Promise<SimRun[]> {
   return api.get<SimRun[]>(`/api/sim/runs${query({ limit })}`);
 }
 
+/** Start a stored program in the simulator (the world's defaults unless given). */
+export async function startSimRun(body: { program: string; world?: string; seed?: number; speed?: number | null }): Promise<SimRun> {
+  return api.post<SimRun>("/api/sim/runs", body);
+}
+
 export async function setSpeed(runId: string, speed: number | null): Promise<SimRun> {
   return api.post<SimRun>(`/api/sim/runs/${encodeURIComponent(runId)}/speed`, { speed });
 }
