@@ -30,14 +30,20 @@ for i in range({LONG_LINES}):
 print("long done")
 """
 
-FOREVER = """from openbricks.tools import wait
+
+def printing_forever(word: str, every_ms: int) -> str:
+    """A program that prints `word N` every `every_ms` until it is stopped."""
+    return f"""from openbricks.tools import wait
 
 i = 0
 while True:
-    print("still going", i)
+    print("{word}", i)
     i += 1
-    wait(100)
+    wait({every_ms})
 """
+
+
+FOREVER = printing_forever("still going", 100)
 
 
 RECORD_SOCKETS = """(() => {
@@ -315,14 +321,7 @@ SHOWN_LAST = (
 )
 
 
-BUSY = """from openbricks.tools import wait
-
-i = 0
-while True:
-    print("busy", i)
-    i += 1
-    wait(20)
-"""
+BUSY = printing_forever("busy", 20)
 
 
 def test_a_terminal_follows_until_its_reader_scrolls_up(console, page_for):
