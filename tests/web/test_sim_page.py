@@ -59,6 +59,16 @@ def test_a_run_started_on_the_page_draws_its_view_then_replays_and_a_sweep_repor
     again.get_by_role("link", name="Replay").wait_for()
     again.locator("[data-testid=sim-output]").get_by_text("arrived").wait_for()
     again.locator("[data-testid=sim-telemetry] .u-legend", has_text="x_mm").wait_for()
+    # The same run from the History: its 3D replay, and run again (in the simulator, not on a hub).
+    again.goto(f"{console.base}/#/history?run={run['run_id']}")
+    again.get_by_role("button", name="3D replay").click()
+    again.wait_for_url(f"**/#/sim?run={run['run_id']}")
+    again.get_by_role("link", name="Replay").wait_for()
+    again.goto(f"{console.base}/#/history?run={run['run_id']}")
+    again.get_by_role("button", name="Run again").click()
+    again.wait_for_url("**/#/sim?run=*")
+    assert run["run_id"] not in again.url
+    again.locator("[data-testid=sim-output]").get_by_text("arrived").wait_for(timeout=RUN_S)
     assert again.errors == [], again.errors
 
     page.fill("input[placeholder='1-50']", "1-2")
@@ -73,6 +83,13 @@ def test_a_run_started_on_the_page_draws_its_view_then_replays_and_a_sweep_repor
     assert [seeds.nth(i).locator("td").first.inner_text() for i in range(seeds.count())] == ["1", "2"]
     seeds.nth(1).scroll_into_view_if_needed()
     screenshot(page, "sim-sweep")
+    # A seed is run again, as the sweep ran it, to watch.
+    seeds.nth(1).get_by_role("button", name="Watch").click()
+    page.wait_for_url("**/#/sim?run=*")
+    page.locator("[data-testid=sim-output]").get_by_text("arrived").wait_for(timeout=RUN_S)
+    with console.api() as api:
+        watched = api.get("/api/sim/runs").json()[0]
+    assert (watched["seed"], watched["program_name"]) == (2, "drive.py")
 
     # Run from the editor with the simulator as its target: the Simulator page opens on that run.
     page.goto(f"{console.base}/#/editor")

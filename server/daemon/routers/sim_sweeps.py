@@ -84,7 +84,9 @@ async def start_sweep(request: Request, body: SweepRequest, caller: Caller = STA
         )
     except JobError as exc:
         raise ApiError.invalid("bad_sweep", str(exc), "see the fields of POST /api/sim/sweeps") from None
-    job = _sweeps(request).start(template, seeds, found["source"], body.workers, body.dask, caller.label)
+    job = _sweeps(request).start(
+        template, seeds, found["source"], found["version"], body.workers, body.dask, caller.label
+    )
     return JobOut(**job.record())
 
 

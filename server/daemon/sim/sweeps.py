@@ -26,8 +26,11 @@ class SweepJobs:
         self.jobs = jobs
         self._stops: dict[str, threading.Event] = {}
 
-    def start(self, template: SimJob, seeds: list[int], source: str, workers, dask, who: str) -> Job:
-        params = {**template.to_dict(), "seeds": seeds, "workers": workers, "dask": dask}
+    def start(
+        self, template: SimJob, seeds: list[int], source: str, version: int, workers, dask, who: str
+    ) -> Job:
+        # The program's stored version is kept, so one seed can be run again exactly as the sweep ran it.
+        params = {**template.to_dict(), "version": version, "seeds": seeds, "workers": workers, "dask": dask}
         job = self.jobs.create(KIND, template.program, who, params)
         stop = self._stops[job.job_id] = threading.Event()
 

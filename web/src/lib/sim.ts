@@ -20,6 +20,9 @@ export interface SimRun {
   exit: string | null;
   score: Record<string, unknown> | null;
   error: string | null;
+  chassis: string | null;
+  limit_ms: number;
+  memory_mb: number;
   live: boolean;
   paused: boolean;
   replay_url: string | null;
@@ -37,13 +40,43 @@ export async function listWorlds(): Promise<string[]> {
   return (await api.get<{ name: string }[]>("/api/sim/worlds")).map((w) => w.name);
 }
 
+export async function getSimRun(runId: string): Promise<SimRun> {
+  return api.get<SimRun>(`/api/sim/runs/${encodeURIComponent(runId)}`);
+}
+
 export async function listSimRuns(limit = 20): Promise<SimRun[]> {
   return api.get<SimRun[]>(`/api/sim/runs${query({ limit })}`);
 }
 
-/** Start a stored program in the simulator (the world's defaults unless given). */
-export async function startSimRun(body: { program: string; world?: string; seed?: number; speed?: number | null }): Promise<SimRun> {
+/** What starts a sim run: a stored program, and the defaults unless given. */
+export interface SimRunRequest {
+  program: string;
+  version?: number;
+  world?: string;
+  chassis?: string | null;
+  seed?: number;
+  speed?: number | null;
+  limit_ms?: number;
+  memory_mb?: number;
+}
+
+/** Start a stored program in the simulator. */
+export async function startSimRun(body: SimRunRequest): Promise<SimRun> {
   return api.post<SimRun>("/api/sim/runs", body);
+}
+
+/**
+ * A run like an earlier one, with `seed`: from a sweep's params or a sim run's record, the same program
+ * (and version, when it was recorded), world, chassis and limits, at real time to watch.
+ */
+export function runLike(p: Record<string, unknown>, seed: number): SimRunRequest {
+  const body: SimRunRequest = { program: String(p.program ?? p.program_name), seed, speed: 1 };
+  if (typeof p.version === "number") body.version = p.version;
+  if (typeof p.world === "string") body.world = p.world;
+  if (typeof p.chassis === "string") body.chassis = p.chassis;
+  if (typeof p.limit_ms === "number") body.limit_ms = p.limit_ms;
+  if (typeof p.memory_mb === "number") body.memory_mb = p.memory_mb;
+  return body;
 }
 
 export async function setSpeed(runId: string, speed: number | null): Promise<SimRun> {

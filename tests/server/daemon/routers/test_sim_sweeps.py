@@ -31,6 +31,7 @@ def test_a_sweep_runs_every_seed_and_gives_the_rows_the_cli_engine_gives(daemon,
     assert answer.status_code == 202, answer.text
     job = answer.json()
     assert job["kind"] == "sim_sweep" and job["params"]["seeds"] == [1, 2, 3]
+    assert job["params"]["version"] == operator.get("/api/programs/straight.py").json()["version"]
     done = operator.get(f"/api/sim/sweeps/{job['job_id']}", params={"wait_s": WAIT_S}).json()
     assert done["state"] == "done", done["message"]
     assert done["progress"] == 100.0 and len(done["steps"]) == 3
