@@ -9,7 +9,8 @@
   performance API, read through Playwright over DevTools (target p95 < 50 ms). The achieved line rate is
   read back from the run store, because on this 2-core machine ten simulated hubs may not reach 100/s.
   Frame times on a shared machine follow its load (given with them); the CPU the browser used meanwhile
-  is the page's own cost, whatever the load.
+  is the page's own cost, whatever the load. The WebSocket messages the page received are counted too:
+  each is a task for the page, which is why it asks the event stream for batches.
 
 Chromium is Debian's (/usr/bin/chromium), as in the browser tests.
 """
@@ -65,6 +66,19 @@ FRAMES_JS = """(ms) => new Promise((resolve) => {
   }
   requestAnimationFrame(tick);
 })"""
+
+
+# Counts the messages the page's WebSockets receive (the event stream's frames), installed before the page.
+COUNT_MESSAGES_JS = """(() => {
+  const Native = window.WebSocket;
+  window.__messages = 0;
+  window.WebSocket = class extends Native {
+    constructor(...args) {
+      super(...args);
+      this.addEventListener("message", () => { window.__messages += 1; });
+    }
+  };
+})()"""
 
 
 # When every hub's tile is in the page, in ms since navigation start (a DOM observer, not a poll).
@@ -179,6 +193,7 @@ def frame_time(browser, console, hubs: list[dict]) -> list[Row]:
     with console.api() as api:
         api.put("/api/programs/stream.py", json={"source": STREAM}).raise_for_status()
         context = browser.new_context(viewport={"width": 1280, "height": 800})
+        context.add_init_script(COUNT_MESSAGES_JS)
         page = context.new_page()
         page.goto(console.url)  # signs in
         page.goto(f"{console.base}/#/output")
@@ -197,9 +212,11 @@ def frame_time(browser, console, hubs: list[dict]) -> list[Row]:
             console_pids += descendants(console.process.pid)
             load = load_average()
             cpu_before = cpu_seconds(browser_pids), cpu_seconds(console_pids)
+            messages = page.evaluate("() => window.__messages")
             t0 = time.monotonic()
             result = page.evaluate(FRAMES_JS, MEASURE_S * 1000)
             elapsed = time.monotonic() - t0
+            messages = page.evaluate("() => window.__messages") - messages
             cpu_after = cpu_seconds(browser_pids), cpu_seconds(console_pids)
             after = {m["name"]: m["value"] for m in cdp.send("Performance.getMetrics")["metrics"]}
             counted_to = {r["run_id"]: r["line_count"] for r in console.open_runs(api)}
@@ -250,6 +267,12 @@ def frame_time(browser, console, hubs: list[dict]) -> list[Row]:
             100 * (cpu_after[1] - cpu_before[1]) / elapsed,
             "% of a core",
             f"the daemon and its {len(hubs)} simulated hubs, competing with the browser for the cores",
+        ),
+        Row(
+            "WebSocket messages to the page",
+            messages / elapsed,
+            "messages/s",
+            "the event stream's frames, each a task for the page",
         ),
         Row(
             "lines streamed to the page",

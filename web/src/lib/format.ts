@@ -13,6 +13,13 @@ export function localTime(ms: number | null | undefined): string {
   return new Date(ms).toLocaleString(undefined, { year: "numeric", month: "2-digit", day: "2-digit", hour: "2-digit", minute: "2-digit", second: "2-digit" });
 }
 
+/** A local time, without the date when it is today's (for narrow lists). */
+export function shortTime(ms: number, now = Date.now()): string {
+  const d = new Date(ms);
+  if (d.toDateString() !== new Date(now).toDateString()) return localTime(ms);
+  return d.toLocaleTimeString(undefined, { hour: "2-digit", minute: "2-digit", second: "2-digit" });
+}
+
 export function duration(startMs: number, endMs: number | null, now = Date.now()): string {
   const ms = (endMs ?? now) - startMs;
   if (ms < 0) return "—";
