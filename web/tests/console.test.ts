@@ -140,4 +140,14 @@ describe("RunTelemetry", () => {
     t.add([s(3000, 4)]);
     expect(t.series.get("x_mm")?.v).toEqual([0, 1, 2, 3, 4]);
   });
+
+  it("puts stored samples before live ones it took before it knew the run was under way", () => {
+    const t = new RunTelemetry();
+    const s = (ms: number, value: number) => ({ name: "x_mm", value, hub_ms: ms, recv_ms: ms });
+    t.add([s(2000, 2)]);
+    t.hold();
+    t.add([s(2500, 3)]);
+    t.release([s(1000, 0), s(1500, 1), s(2000, 2)]);
+    expect(t.series.get("x_mm")).toEqual({ t: [0, 0.5, 1, 1.5], v: [0, 1, 2, 3] });
+  });
 });

@@ -68,6 +68,8 @@ export class ConsoleModel {
   /** Single runs' output, for a page that shows one run (the Simulator's), the newest few kept. */
   readonly runOutputs = new Map<string, HubOutput>();
   readonly telemetry = new Map<string, RunTelemetry>();
+  /** Runs whose stored telemetry was read (or is being read) into `telemetry`. */
+  private readonly telemetryRead = new Set<string>();
 
   hubList = $derived(Object.values(this.hubs).sort((a, b) => a.name.localeCompare(b.name) || a.hub_id.localeCompare(b.hub_id)));
   anyRunning = $derived(Object.values(this.hubs).some((h) => h.status === "running"));
@@ -104,25 +106,26 @@ export class ConsoleModel {
   }
 
   /**
-   * A run's telemetry as it arrives. `stored`: the run may have begun before this page saw it, so what
-   * the daemon kept is read first (live samples wait for it).
+   * A run's telemetry as it arrives. `stored`: for a run this page did not see start, what the daemon
+   * kept is read once, and the live samples join after it.
    */
   runTelemetry(runId: string, stored = false): RunTelemetry {
     let t = this.telemetry.get(runId);
     if (!t) {
       t = new RunTelemetry();
       this.telemetry.set(runId, t);
-      if (stored) {
-        const fresh = t;
-        fresh.hold();
-        fetchRunSamples(runId).then(
-          (samples) => fresh.release(samples),
-          (err) => {
-            fresh.release([]);
-            this.fail(err, "Loading the run's telemetry");
-          },
-        );
-      }
+    }
+    if (stored && !this.runs[runId] && !this.telemetryRead.has(runId)) {
+      this.telemetryRead.add(runId);
+      const reading = t;
+      reading.hold();
+      fetchRunSamples(runId).then(
+        (samples) => reading.release(samples),
+        (err) => {
+          reading.release([]);
+          this.fail(err, "Loading the run's telemetry");
+        },
+      );
     }
     return t;
   }

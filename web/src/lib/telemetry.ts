@@ -21,13 +21,30 @@ export class RunTelemetry {
     this.held ??= [];
   }
 
-  /** The stored samples, then the waiting live ones the store did not have yet, each once and in order. */
+  /**
+   * The stored samples, then the live ones (held, or taken before the hold) the store did not have yet,
+   * each once and in order.
+   */
   release(stored: TelemetrySample[]): void {
-    const held = this.held ?? [];
+    const live = [...this.taken(), ...(this.held ?? [])];
     this.held = null;
+    this.series.clear();
+    this.t0 = null;
     const last = new Map<string, number>();
     for (const s of stored) last.set(s.name, Math.max(last.get(s.name) ?? -Infinity, s.hub_ms ?? s.recv_ms));
-    this.add([...stored, ...held.filter((s) => (s.hub_ms ?? s.recv_ms) > (last.get(s.name) ?? -Infinity))]);
+    this.add([...stored, ...live.filter((s) => (s.hub_ms ?? s.recv_ms) > (last.get(s.name) ?? -Infinity))]);
+  }
+
+  /** What this holds, as samples again (times to the millisecond they came with). */
+  private taken(): TelemetrySample[] {
+    const out: TelemetrySample[] = [];
+    for (const [name, col] of this.series) {
+      for (let i = 0; i < col.t.length; i++) {
+        const ms = Math.round((this.t0 ?? 0) + col.t[i] * 1000);
+        out.push({ name, value: col.v[i], hub_ms: ms, recv_ms: ms });
+      }
+    }
+    return out.sort((a, b) => a.recv_ms - b.recv_ms);
   }
 
   add(samples: TelemetrySample[]): void {
