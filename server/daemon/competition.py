@@ -96,8 +96,7 @@ class Competition:
         raise ApiError.conflict(
             "competition_locked",
             f"cannot {what}: competition mode locks uploads, new runs, flashing and servo re-ID while a hub "
-            f"runs, and {names} "
-            f"{verb} running",
+            f"runs, and {names} {verb} running",
             "wait for the run to end or stop it (stop and STOP ALL always work); an operator can turn "
             'competition mode off with PUT /api/competition {"on": false}',
             detail={"running": running},

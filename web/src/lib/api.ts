@@ -99,9 +99,14 @@ export class ApiError extends Error {
   }
 }
 
+/** A daemon path ("/sim/runs/R/replay/") relative to the page, so a console behind a path prefix works too. */
+export function pagePath(path: string): string {
+  return path.replace(/^\//, "");
+}
+
 /** The base every URL is resolved against: the page's own folder, so a path prefix keeps working. */
 function url(path: string): string {
-  return new URL(path.replace(/^\//, ""), document.baseURI).toString();
+  return new URL(pagePath(path), document.baseURI).toString();
 }
 
 export async function request<T>(method: string, path: string, body?: unknown, timeoutMs = 15000): Promise<T> {

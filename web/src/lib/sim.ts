@@ -83,7 +83,10 @@ export async function setSpeed(runId: string, speed: number | null): Promise<Sim
   return api.post<SimRun>(`/api/sim/runs/${encodeURIComponent(runId)}/speed`, { speed });
 }
 
-/** A daemon path as the page links it: relative, so a console behind a path prefix works too. */
-export function relative(url: string): string {
-  return url.replace(/^\//, "");
+/** A run's score in a line: each measure with its value ("points 40, progress 0.93"), "—" for none. */
+export function scoreText(score: Record<string, unknown> | null | undefined): string {
+  if (!score) return "—";
+  return Object.entries(score)
+    .map(([k, v]) => `${k} ${typeof v === "number" ? Math.round(v * 100) / 100 : JSON.stringify(v)}`)
+    .join(", ");
 }
