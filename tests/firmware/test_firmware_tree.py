@@ -208,10 +208,16 @@ def test_s3_i2c0_is_the_gpio_maps_sensor_bus():
 def test_s3_uses_its_8mb_flash_and_native_usb():
     config = sdkconfig("openbricks_esp32s3")
     assert config["CONFIG_ESPTOOLPY_FLASHSIZE_8MB"] == "y"
-    assert (
-        "boards/sdkconfig.usb"
-        in cmake_sets(BOARDS / "openbricks_esp32s3" / "mpconfigboard.cmake")["SDKCONFIG_DEFAULTS"]
-    )
+    # MicroPython 1.28's port turns native USB on for every chip with a USB-OTG peripheral (there is
+    # no sdkconfig.usb fragment any more); the board must not switch it off.
+    assert "MICROPY_HW_ENABLE_USBDEV" not in header_defines(BOARDS / "openbricks_esp32s3" / "mpconfigboard.h")
+
+
+def test_the_classic_esp32s_controller_options_stay_with_the_classic_esp32():
+    """BTDM_CTRL_* exist only for the classic ESP32: from the shared fragment, the S3 build dropped them."""
+    shared = (BOARDS / "sdkconfig.ble").read_text()
+    assert "CONFIG_BTDM_" not in re.sub(r"#.*", "", shared)
+    assert sdkconfig("openbricks_esp32")["CONFIG_BTDM_CTRL_MODE_BLE_ONLY"] == "y"
 
 
 # --- the build script ---------------------------------------------------------------------------

@@ -6,7 +6,6 @@ set(IDF_TARGET esp32s3)
 
 set(SDKCONFIG_DEFAULTS
     boards/sdkconfig.base
-    boards/sdkconfig.usb
     ${MICROPY_BOARD_DIR}/../sdkconfig.ble
     ${MICROPY_BOARD_DIR}/../sdkconfig.nowifi
     ${MICROPY_BOARD_DIR}/sdkconfig.board
