@@ -25,7 +25,7 @@ import genhdr
 import include_path
 import sdkconfig
 import sources
-from errors import CheckError
+from steps import CheckError
 
 REPO = Path(__file__).resolve().parents[2]
 TARGETS = ("esp32", "esp32s3")

@@ -10,7 +10,7 @@ Espressif toolchain would set is in toolchain_shim.h, included first.
 import re
 from pathlib import Path
 
-from errors import CheckError
+from steps import CheckError
 
 CHECK_DIR = Path(__file__).resolve().parent
 NATIVE = CHECK_DIR.parent / "native"

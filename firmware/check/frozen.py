@@ -2,14 +2,12 @@
 build freezes them (tools/makemanifest.py: one .mpy per module, `-march` from the port).
 """
 
-import subprocess
 import sys
 from pathlib import Path
 
-from errors import CheckError
+from steps import CheckError, run
 
 MANIFEST = Path(__file__).resolve().parents[1] / "manifest.py"
-STEP_LIMIT_S = 600
 # ports/esp32/esp32_common.cmake: MICROPY_CROSS_FLAGS for the Xtensa chips (ESP32 and ESP32-S3).
 CROSS_FLAGS = ["-march=xtensawin"]
 
@@ -18,17 +16,7 @@ def build_mpy_cross(micropython, out):
     """MicroPython's own mpy-cross, built from the same source tree the port is (once)."""
     binary = out / "mpy-cross"
     if not binary.is_file():
-        try:
-            result = subprocess.run(
-                ["make", "-C", str(micropython / "mpy-cross"), "-j2", f"BUILD={out}"],
-                capture_output=True,
-                text=True,
-                timeout=STEP_LIMIT_S,
-            )
-        except subprocess.TimeoutExpired:
-            raise CheckError(f"building mpy-cross did not finish within {STEP_LIMIT_S} s") from None
-        if result.returncode != 0 or not binary.is_file():
-            raise CheckError(f"building mpy-cross failed:\n{(result.stdout + result.stderr)[-4000:]}")
+        run(["make", "-C", str(micropython / "mpy-cross"), "-j2", f"BUILD={out}"], "building mpy-cross")
     return binary
 
 
@@ -78,9 +66,10 @@ def compile_frozen(mpy_cross, files, out):
         mpy = out / Path(target_path).with_suffix(".mpy")
         mpy.parent.mkdir(parents=True, exist_ok=True)
         command = [str(mpy_cross), "-o", str(mpy), "-s", target_path, *CROSS_FLAGS, str(source)]
-        result = subprocess.run(command, capture_output=True, text=True, timeout=STEP_LIMIT_S)
-        if result.returncode != 0:
-            problems.append(f"{source}: {(result.stdout + result.stderr).strip()}")
+        try:
+            run(command, f"mpy-cross {source}")
+        except CheckError as err:
+            problems.append(str(err))
     if problems:
         raise CheckError("mpy-cross refused frozen modules:\n  " + "\n  ".join(problems))
     return len(files)

@@ -3,23 +3,10 @@ the root pointers and the version, made by MicroPython's own scripts from the so
 checked, preprocessed under the target's configuration, as py/mkrules.cmake does for the port.
 """
 
-import subprocess
 import sys
 from pathlib import Path
 
-from errors import CheckError
-
-STEP_LIMIT_S = 300
-
-
-def _run(command, what, **kwargs):
-    try:
-        result = subprocess.run(command, capture_output=True, text=True, timeout=STEP_LIMIT_S, **kwargs)
-    except subprocess.TimeoutExpired:
-        raise CheckError(f"{what} did not finish within {STEP_LIMIT_S} s") from None
-    if result.returncode != 0:
-        raise CheckError(f"{what} failed:\n{(result.stdout + result.stderr)[-6000:]}")
-    return result.stdout
+from steps import run
 
 
 def generate(micropython, compiler, cpp_flags, bindings, out):
@@ -28,14 +15,14 @@ def generate(micropython, compiler, cpp_flags, bindings, out):
     genhdr.mkdir(parents=True, exist_ok=True)
     py = micropython / "py"
     python = sys.executable
-    _run(
+    run(
         [python, str(py / "makeversionhdr.py"), str(genhdr / "mpversion.h")],
         "makeversionhdr.py",
         cwd=micropython,
     )
     last = genhdr / "qstr.i.last"
     flags = [*cpp_flags, "-DNO_QSTR"]
-    _run(
+    run(
         [
             python,
             str(py / "makeqstrdefs.py"),
@@ -54,11 +41,11 @@ def generate(micropython, compiler, cpp_flags, bindings, out):
         "collecting the bindings' qstrs (makeqstrdefs.py pp)",
     )
     for mode, collected in (("qstr", "qstrdefs.collected.h"), ("root_pointer", "root_pointers.collected")):
-        _run(
+        run(
             [python, str(py / "makeqstrdefs.py"), "split", mode, str(last), str(genhdr / mode), "_"],
             f"makeqstrdefs.py split {mode}",
         )
-        _run(
+        run(
             [
                 python,
                 str(py / "makeqstrdefs.py"),
@@ -81,19 +68,17 @@ def generate(micropython, compiler, cpp_flags, bindings, out):
         if path.is_file()
     )
     quoted = "\n".join(f'"{line}"' if line.startswith("Q(") else line for line in listing.splitlines())
-    preprocessed = _run([*compiler, "-E", *cpp_flags, "-"], "preprocessing the qstr list", input=quoted)
+    preprocessed = run([*compiler, "-E", *cpp_flags, "-"], "preprocessing the qstr list", input=quoted)
     lines = [
         line[1:-1] if line.startswith('"Q(') and line.endswith(')"') else line
         for line in preprocessed.splitlines()
     ]
     (genhdr / "qstrdefs.preprocessed.h").write_text("\n".join(lines) + "\n")
     (genhdr / "qstrdefs.generated.h").write_text(
-        _run(
-            [python, str(py / "makeqstrdata.py"), str(genhdr / "qstrdefs.preprocessed.h")], "makeqstrdata.py"
-        )
+        run([python, str(py / "makeqstrdata.py"), str(genhdr / "qstrdefs.preprocessed.h")], "makeqstrdata.py")
     )
     (genhdr / "root_pointers.h").write_text(
-        _run(
+        run(
             [python, str(py / "make_root_pointers.py"), str(genhdr / "root_pointers.collected")],
             "make_root_pointers.py",
         )

@@ -10,10 +10,9 @@ choices come out as ESP-IDF's build makes them.
 """
 
 import re
-import subprocess
 from pathlib import Path
 
-from errors import CheckError
+from steps import CheckError, run
 
 COMPONENTS_SCRIPT = Path(__file__).resolve().parent / "components.cmake"
 CMAKE_LIMIT_S = 60
@@ -52,12 +51,7 @@ def _read(idf, target, sdkconfig_cmake, names, out):
         "-P",
         str(COMPONENTS_SCRIPT),
     ]
-    try:
-        result = subprocess.run(command, capture_output=True, text=True, timeout=CMAKE_LIMIT_S, cwd=out)
-    except subprocess.TimeoutExpired:
-        raise CheckError(f"reading ESP-IDF's components took over {CMAKE_LIMIT_S} s") from None
-    if result.returncode != 0:
-        raise CheckError(f"reading ESP-IDF's components {', '.join(names)} failed:\n{result.stderr[-3000:]}")
+    run(command, f"reading ESP-IDF's components {', '.join(names)} (cmake -P)", CMAKE_LIMIT_S, cwd=out)
     found = {}
     for line in listing.read_text().splitlines():
         name, dirs, requires = line.split("|")

@@ -11,12 +11,11 @@ import contextlib
 import json
 import os
 import re
-import subprocess
 import sys
 from dataclasses import dataclass
 from pathlib import Path
 
-from errors import CheckError
+from steps import CheckError, run
 
 ROOT_KCONFIG = Path(__file__).resolve().parent / "Kconfig"
 IDF_VERSION = "5.5.4"
@@ -210,10 +209,7 @@ def generate(trees, target, fragments, out):
         "json",
         str(values),
     ]
-    try:
-        result = subprocess.run(command, capture_output=True, text=True, timeout=KCONFGEN_LIMIT_S, cwd=out)
-    except subprocess.TimeoutExpired:
-        raise CheckError(f"kconfgen for {target} did not finish within {KCONFGEN_LIMIT_S} s") from None
-    if result.returncode != 0 or not header.is_file():
-        raise CheckError(f"kconfgen for {target} failed:\n{(result.stdout + result.stderr)[-4000:]}")
+    run(command, f"kconfgen for the {target}", KCONFGEN_LIMIT_S, cwd=out)
+    if not header.is_file():
+        raise CheckError(f"kconfgen for the {target} wrote no {header}")
     return Config(out, cmake, json.loads(values.read_text()))

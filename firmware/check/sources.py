@@ -12,7 +12,7 @@ import tarfile
 from dataclasses import dataclass
 from pathlib import Path
 
-from errors import CheckError
+from steps import CheckError
 
 REPO = Path(__file__).resolve().parents[2]
 IDF_ARCHIVE = "esp-idf-v5.5.4-esp32-src.tar.gz"
