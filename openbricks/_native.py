@@ -16,6 +16,7 @@ NAMES = (
     "ImuYaw",
     "PCNTEncoder",
     "ICM45686",
+    "HBridge",
     "scs",
     "serial_bus",
     "MotorIO",

@@ -113,6 +113,10 @@ class QuadratureEncoder:
     def count(self):
         return self._count * self._sign
 
+    def native_counter(self):
+        """None: this encoder is counted in Python (a pin interrupt)."""
+        return None
+
     def reset(self, count=0):
         self._count = count * self._sign
 
@@ -187,6 +191,10 @@ class PCNTEncoder:
                 if holder._native is not None:
                     holder._native.close()
                 del PCNTEncoder._units[unit]
+
+    def native_counter(self):
+        """The firmware's encoder core counting this unit (read in C by the hard tick), or None."""
+        return self._native
 
     def count(self):
         if self._native is not None:

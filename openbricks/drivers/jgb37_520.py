@@ -12,6 +12,11 @@ encoder and hands the core its motor IO (read the angle, write a duty, release
 the bridge). Open-loop commands (dc, brake, coast) and the encoder angle work
 on a build without the native core; closed-loop ones need it.
 
+On the firmware both ends of that IO are native (the PCNT encoder core and the
+H-bridge core), so it is a MotorIO joined in C (`HBridge.motor_io`): the servo
+core, or a drive base's controller, then runs in the hard tick with no Python
+call, as the serial-bus wheels do. Elsewhere it is BridgeIO, in Python.
+
 A wheel has one driver at a time. A DriveBase drives the same motor IO with
 its own controller after `give_to_drivebase()` stood this motor's core down;
 any direct command here (run_speed, run_angle, dc, brake, coast, hold, ...)
@@ -76,7 +81,7 @@ class JGB37Motor(Motor):
         except Exception:
             self._bridge.close()
             raise
-        self._io = BridgeIO(self._encoder, self._bridge, 360.0 / counts_per_output_rev)
+        self._io = _motor_io(self._encoder, self._bridge, 360.0 / counts_per_output_rev)
         self._driver = None  # the drive base wheel pair driving this bridge, while one does
         self._servo = self._make_servo(kp)
         estop.on_engage(self.coast)  # through the core, or its next tick would drive the bridge again
@@ -96,14 +101,17 @@ class JGB37Motor(Motor):
         if servo_type is None:
             return None  # open-loop only on this build; closed-loop calls say so
         io = self._io
+        motor_io = _native.get("MotorIO")
+        if motor_io is not None and isinstance(io, motor_io):
+            wiring = {"io": io}  # read and written in C: the hard tick may run this core
+        else:
+            wiring = {"read_angle": io.read_angle, "write_duty": io.write_duty, "write_coast": io.coast}
         servo = servo_type(
-            read_angle=io.read_angle,
-            write_duty=io.write_duty,
-            write_coast=io.coast,
             counts_per_rev=self.counts_per_output_rev,
             max_speed_dps=self.no_load_dps,
             ff_speed=100.0 / self.no_load_dps,
             speed_kp=kp,
+            **wiring,
         )
         return servo
 
@@ -189,13 +197,19 @@ class JGB37Motor(Motor):
         """Hold the current angle on the position loop. A stop: allowed while the e-stop is engaged."""
         self._native("hold").hold()
 
+    def _encoder_angle(self):
+        angle = self._io.read_angle()
+        if angle is None:  # only a native IO says so: its PCNT unit could not be read
+            raise OSError("%s: the encoder's PCNT unit could not be read" % type(self).__name__)
+        return angle
+
     def angle(self):
         """Output-shaft angle in degrees, straight from the encoder count."""
-        return self._io.read_angle() + self._offset_deg
+        return self._encoder_angle() + self._offset_deg
 
     def reset_angle(self, angle=0):
         """Make the shaft's current position read as `angle` degrees (0 by default)."""
-        self._offset_deg = angle - self._io.read_angle()
+        self._offset_deg = angle - self._encoder_angle()
         if self._servo is not None:
             self._servo.reset_angle(angle)
 
@@ -260,6 +274,16 @@ class JGB37Motor(Motor):
             _native.motor_process.unsubscribe(self._servo)
         self._bridge.close()
         self._encoder.close()
+
+
+def _motor_io(encoder, bridge, deg_per_count):
+    """The wheel's IO: joined in C when the encoder and the bridge are both the firmware's cores (the hard
+    tick may then drive it), else BridgeIO over the Python objects."""
+    native_bridge = bridge.native_bridge()
+    native_encoder = encoder.native_counter()
+    if native_bridge is not None and native_encoder is not None:
+        return native_bridge.motor_io(native_encoder, deg_per_count)
+    return BridgeIO(encoder, bridge, deg_per_count)
 
 
 class BridgeIO:

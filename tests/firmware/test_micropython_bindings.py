@@ -34,6 +34,7 @@ TYPES = (
     "SerialBus",
     "PCNTEncoder",
     "ICM45686",
+    "HBridge",
 )
 TYPE_DEFINITION = re.compile(r"MP_DEFINE_CONST_OBJ_TYPE\(\s*(\w+),\s*MP_QSTR_(\w+),(.*?)\);", re.S)
 

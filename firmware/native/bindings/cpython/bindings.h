@@ -18,6 +18,8 @@ int ob_py_add_scs(PyObject *module);
 int ob_py_add_imu_yaw(PyObject *module);
 int ob_py_add_encoder(PyObject *module);
 int ob_py_add_icm45686(PyObject *module);
+/* HBridge; needs MotorIO and PCNTEncoder added first. */
+int ob_py_add_hbridge(PyObject *module);
 /* MotorIO and the _C_API capsule; needs the scheduler added first. */
 int ob_py_add_capi(PyObject *module);
 /* SerialBus and serial_bus(); needs the scheduler and MotorIO added first. */
@@ -29,6 +31,11 @@ int ob_py_add_serial_bus(PyObject *module);
 PyObject *ob_py_imu_yaw_seed_bias(ob_imu_yaw_t *yaw, PyObject *args);
 /* 1 and *source filled when obj is an openbricks_native.ICM45686 (a DriveBase reads its heading in C). */
 int ob_py_icm45686_heading_source(PyObject *obj, ob_heading_source_t *source);
+
+#include "encoder.h"
+/* The encoder core of an open openbricks_native.PCNTEncoder, or NULL (py_encoder.c): an H-bridge's
+ * motor_io() reads it in C. */
+ob_encoder_t *ob_py_pcnt_encoder_get(PyObject *obj);
 
 /* motor_process.hard_tick_count() / hard_tick_selftest(duration_ms=100) (py_hard_tick.c). */
 PyObject *ob_py_hard_tick_count(PyObject *self, PyObject *unused);

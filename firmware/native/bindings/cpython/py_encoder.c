@@ -158,11 +158,23 @@ static PyType_Spec pcnt_encoder_spec = {
     pcnt_encoder_slots,
 };
 
+/* The type as created (a heap type), for ob_py_pcnt_encoder_get. */
+static PyObject *pcnt_encoder_type;
+
+ob_encoder_t *ob_py_pcnt_encoder_get(PyObject *obj) {
+    if (pcnt_encoder_type == NULL || !PyObject_TypeCheck(obj, (PyTypeObject *)pcnt_encoder_type)) {
+        return NULL;
+    }
+    PCNTEncoderObject *self = (PCNTEncoderObject *)obj;
+    return self->closed ? NULL : &self->enc;
+}
+
 int ob_py_add_encoder(PyObject *module) {
     PyObject *type = PyType_FromSpec(&pcnt_encoder_spec);
     if (type == NULL) {
         return -1;
     }
+    pcnt_encoder_type = type; /* the module's reference below keeps it alive */
     /* The host counts no pins: the runtime keeps machine.Encoder (the simulator's) on builds like this. */
     int rc = PyObject_SetAttrString(type, "HARDWARE", Py_False);
     if (rc == 0) {

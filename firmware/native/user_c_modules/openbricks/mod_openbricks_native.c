@@ -43,6 +43,7 @@ static const mp_rom_map_elem_t mod_globals_table[] = {
     {MP_ROM_QSTR(MP_QSTR_ImuYaw), MP_ROM_PTR(&ob_mp_imu_yaw_type)},
     {MP_ROM_QSTR(MP_QSTR_PCNTEncoder), MP_ROM_PTR(&ob_mp_pcnt_encoder_type)},
     {MP_ROM_QSTR(MP_QSTR_ICM45686), MP_ROM_PTR(&ob_mp_icm45686_type)},
+    {MP_ROM_QSTR(MP_QSTR_HBridge), MP_ROM_PTR(&ob_mp_hbridge_type)},
     {MP_ROM_QSTR(MP_QSTR_scs), MP_ROM_PTR(&ob_mp_scs_module)},
     {MP_ROM_QSTR(MP_QSTR_SerialBus), MP_ROM_PTR(&ob_mp_serial_bus_type)},
     {MP_ROM_QSTR(MP_QSTR_serial_bus), MP_ROM_PTR(&ob_mp_serial_bus_obj)},

@@ -128,6 +128,19 @@ extern const mp_obj_type_t ob_mp_native_spi_type;
 const ob_pcnt_t *ob_mp_native_counter_get(mp_obj_t obj);
 const ob_spi_t *ob_mp_native_spi_get(mp_obj_t obj);
 
+/* An H-bridge's pins the same way (hbridge_pins.h): on the hub GPIO and LEDC, in the unix port's
+ * tests an emulated DC motor in C (_openbricks_bench) that turns as the levels say. */
+#include "hbridge_pins.h"
+typedef struct {
+    mp_obj_base_t base;
+    ob_hbridge_pins_t pins;
+} ob_mp_native_hbridge_pins_t;
+
+extern const mp_obj_type_t ob_mp_native_hbridge_pins_type;
+
+/* The ob_hbridge_pins_t of a native H-bridge pin set, or NULL for any other object. */
+const ob_hbridge_pins_t *ob_mp_native_hbridge_pins_get(mp_obj_t obj);
+
 /* ---- The hard tick and the motor lock (mp_hard_tick.c, mp_hard_lock.c). ---- */
 
 /* Start the 1 kHz hard tick (idempotent); raises OSError when the platform timer cannot start. */
@@ -166,6 +179,12 @@ extern const mp_obj_type_t ob_mp_drivebase_type;
 extern const mp_obj_type_t ob_mp_imu_yaw_type;
 extern const mp_obj_type_t ob_mp_pcnt_encoder_type;
 extern const mp_obj_type_t ob_mp_icm45686_type;
+extern const mp_obj_type_t ob_mp_hbridge_type;
+
+#include "encoder.h"
+/* The encoder core of an open PCNTEncoder (mp_encoder.c), or NULL for anything else: an H-bridge's
+ * motor_io() reads it in C. */
+ob_encoder_t *ob_mp_pcnt_encoder_get(mp_obj_t obj);
 
 #include "drivebase.h"
 /* True and *source filled when obj is an ICM45686 (mp_icm45686.c): a DriveBase reads its heading in C. */
@@ -205,6 +224,16 @@ void ob_mp_spi_esp32_open(int spi_id, int sck, int mosi, int miso, int cs, uint3
 
 /* Remove the device and free the bus opened for *spi. */
 void ob_mp_spi_esp32_close(const ob_spi_t *spi);
+
+/*
+ * IN1/IN2 on in1/in2 as GPIO outputs and EN's PWM on an LEDC channel at freq_hz (mp_hbridge_esp32.c),
+ * all low; fills *pins. Raises ValueError for a pin that cannot drive an output, OSError when no LEDC
+ * channel or timer is free or the peripheral refuses.
+ */
+void ob_mp_hbridge_esp32_open(int in1, int in2, int pwm, uint32_t freq_hz, ob_hbridge_pins_t *pins);
+
+/* Stop the PWM (EN low), give the channel and its timer back, and leave IN1/IN2 low. */
+void ob_mp_hbridge_esp32_close(const ob_hbridge_pins_t *pins);
 #endif
 
 /* The module's motor_process (created on first use; see mp_scheduler.c). */

@@ -169,6 +169,8 @@ static mp_obj_t pcnt_encoder_close(mp_obj_t self_in) {
         #endif
         self->counter = MP_OBJ_NULL;
         self->hardware = false;
+        /* An H-bridge's motor IO may still hold this core: it must find no counter to read, not a freed unit. */
+        self->enc.pcnt = (ob_pcnt_t){NULL, NULL};
     }
     self->closed = true;
     return mp_const_none;
@@ -195,6 +197,14 @@ static MP_DEFINE_CONST_DICT(pcnt_encoder_locals, pcnt_encoder_locals_table);
 /* Methods run under the motor lock: the hard tick samples the same encoder from its own context. */
 static void pcnt_encoder_attr(mp_obj_t self_in, qstr attr, mp_obj_t *dest) {
     ob_mp_locked_attr(self_in, attr, dest, &pcnt_encoder_locals);
+}
+
+ob_encoder_t *ob_mp_pcnt_encoder_get(mp_obj_t obj) {
+    if (!mp_obj_is_type(obj, &ob_mp_pcnt_encoder_type)) {
+        return NULL;
+    }
+    pcnt_encoder_obj_t *self = MP_OBJ_TO_PTR(obj);
+    return self->closed ? NULL : &self->enc;
 }
 
 MP_DEFINE_CONST_OBJ_TYPE(

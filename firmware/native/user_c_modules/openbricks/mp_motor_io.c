@@ -1,5 +1,5 @@
 /*
- * MotorIO and the native UART, counter and SPI bases: how a binding object
+ * MotorIO and the native UART, counter, SPI and H-bridge pin bases: how a binding object
  * hands a controller, the serial-bus engine or a sensor core C functions that
  * never call Python (host: the MotorIO of py_capi.c / py_motor_io.h).
  *
@@ -77,4 +77,15 @@ MP_DEFINE_CONST_OBJ_TYPE(
 const ob_spi_t *ob_mp_native_spi_get(mp_obj_t obj) {
     const ob_mp_native_spi_t *link = provider_part(obj, &ob_mp_native_spi_type);
     return link != NULL && link->spi.transfer != NULL ? &link->spi : NULL;
+}
+
+MP_DEFINE_CONST_OBJ_TYPE(
+    ob_mp_native_hbridge_pins_type,
+    MP_QSTR_NativeHBridgePins,
+    MP_TYPE_FLAG_NONE
+    );
+
+const ob_hbridge_pins_t *ob_mp_native_hbridge_pins_get(mp_obj_t obj) {
+    const ob_mp_native_hbridge_pins_t *pins = provider_part(obj, &ob_mp_native_hbridge_pins_type);
+    return pins != NULL && pins->pins.write != NULL ? &pins->pins : NULL;
 }

@@ -11,6 +11,7 @@
 extern const mp_obj_type_t ob_mp_bench_bus_type;
 extern const mp_obj_type_t ob_mp_bench_encoder_type;
 extern const mp_obj_type_t ob_mp_bench_imu_type;
+extern const mp_obj_type_t ob_mp_bench_dc_motor_type;
 
 /* The emulated bus of a BenchBus object, or NULL for any other object. */
 ob_bench_bus_t *ob_bench_bus_get(mp_obj_t obj);

@@ -13,7 +13,8 @@
  * Its methods run under the motor lock, as the engine's do. angle_deg(id)
  * is the true shaft angle; set_silent(id, True) unplugs a servo.
  * BenchEncoder and BenchIMU (mod_bench_sensors.c) are emulated sensors on
- * native links, for the hard tick to poll.
+ * native links, for the hard tick to poll; BenchDCMotor (mod_bench_dc.c) a DC
+ * gear motor an H-bridge drives and a PCNT unit counts.
  */
 #include <string.h>
 
@@ -174,6 +175,7 @@ static const mp_rom_map_elem_t bench_globals_table[] = {
     {MP_ROM_QSTR(MP_QSTR_BenchBus), MP_ROM_PTR(&ob_mp_bench_bus_type)},
     {MP_ROM_QSTR(MP_QSTR_BenchEncoder), MP_ROM_PTR(&ob_mp_bench_encoder_type)},
     {MP_ROM_QSTR(MP_QSTR_BenchIMU), MP_ROM_PTR(&ob_mp_bench_imu_type)},
+    {MP_ROM_QSTR(MP_QSTR_BenchDCMotor), MP_ROM_PTR(&ob_mp_bench_dc_motor_type)},
 };
 static MP_DEFINE_CONST_DICT(bench_globals, bench_globals_table);
 
