@@ -367,6 +367,12 @@ def _add_docs(sub):
         help="Page to open, e.g. install, first-robot, simulator, console, drivebase, motors. "
         "Omit for the index.",
     )
+    p.add_argument(
+        "--path",
+        action="store_true",
+        help="Print the page's file instead of opening it (where the installed manual is, for another "
+        "browser or a script).",
+    )
     return p
 
 

@@ -74,3 +74,15 @@ def test_a_site_that_is_not_built_says_how_to_build_it(tmp_path):
     assert done.returncode == 1 and opened == []
     assert "the documentation is not built" in done.stderr and "make docs" in done.stderr
     assert "Traceback" not in done.stderr
+
+
+def test_path_prints_where_the_page_is_and_opens_nothing(tmp_path):
+    """Where no browser can be started from this process (a server, a script), the file is what is wanted."""
+    done, opened = run_docs(tmp_path, "--path")
+    assert done.returncode == 0, done.stderr
+    assert opened == [] and done.stdout == f"{site_dir() / 'index.html'}\n"
+    done, opened = run_docs(tmp_path, "drivebase", "--path")
+    assert done.returncode == 0 and opened == []
+    assert Path(done.stdout.strip()) == site_dir() / "api" / "drivebase.html"
+    done, opened = run_docs(tmp_path, "--path", env={"OPENBRICKS_DOCS_DIR": str(tmp_path / "nowhere")})
+    assert done.returncode == 1 and done.stdout == "" and "make docs" in done.stderr
