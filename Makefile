@@ -20,7 +20,7 @@ MICROPY_BUILD := $(REPO_ROOT)/build/micropython
 UNIX_MICROPYTHON := $(MICROPY_BUILD)/micropython
 NATIVE_SOURCES := $(wildcard firmware/native/*.[ch] firmware/native/platform/* firmware/native/user_c_modules/openbricks/* firmware/native/user_c_modules/openbricks_bench/*)
 
-.PHONY: setup system-packages test test-fast lint console bench micropython web web-check docs firmware-check
+.PHONY: setup system-packages test test-fast lint console bench micropython web web-check docs firmware-check dist
 
 setup: $(VENV)/.installed $(MPY_NODE)
 
@@ -92,6 +92,13 @@ $(DOCS_HTML)/index.html: $(DOCS_SOURCES) | $(VENV)/.installed
 	touch $@
 
 docs: $(DOCS_HTML)/index.html
+
+# The sdist and the wheel as a release ships them, into dist/. The console and the manual are brought up
+# to date first: the build backend (build_backend/) builds them only when they are absent, as in a clean
+# clone. The wheel is built from the sdist, as pip builds it for a user who installs the sdist.
+dist: web docs | $(VENV)/.installed
+	rm -f dist/openbricks-*
+	$(PY) -m build --outdir dist .
 
 web-check: build/web-check.stamp
 
