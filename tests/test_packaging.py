@@ -1,6 +1,6 @@
 """The installed distribution: import names, the console script, and the sdist and wheel a release ships.
 
-The e2e tests build one release per session as `python -m build` builds it from a clean clone (the
+The e2e tests build one release per test run, as `python -m build` builds it from a clean clone (the
 console and the manual built by the build backend, not by `make`), then install the sdist the way a user
 does, into a fresh venv on a PATH with no node, and use it: the commands, the console's pages, the manual.
 """
@@ -151,7 +151,7 @@ def run_logged(command: list[str], log: Path, timeout: float, **kwargs) -> float
 
 @pytest.fixture(scope="session")
 def release(tmp_path_factory) -> Release:
-    """One sdist and one wheel for the session, by `python -m build` on a clean clone (the sdist first,
+    """One sdist and one wheel for the whole test run, by `python -m build` on a clean clone (the sdist first,
     the wheel from it), on the developer's PATH: node and the Sphinx toolchain are the sdist's to use."""
     scratch = tmp_path_factory.mktemp("release")
     tree = clean_clone(scratch / "clone")
