@@ -7,17 +7,22 @@ A real robot is wired the way its program says. So the simulated one is too:
   `--chassis` stays an override;
 - while it runs, `ProgramRobot` watches the runtime's driver constructors (an import hook on the
   program's fresh copy of `openbricks`, installed after the shim and the hub's own finder): the
-  motors passed to `DriveBase` are mounted on the wheels they name (robot.py `place_wheels`), and
-  a TCS34725 built on the bare I2C bus gets one wired there (sensors/rig.py
+  motors passed to `DriveBase` are mounted on the wheels they name (robot.py `place_wheels`), a
+  DC motor's leads are wired to suit the driver built on its bridge channel (robot.py
+  `build_motor`), and a TCS34725 built on the bare I2C bus gets one wired there (sensors/rig.py
   `wire_bare_colour_sensor`) unless the rig was told otherwise.
 
 Where the program and the build disagree (JGB37 motors on the servo chassis, say), one line tells
-the user, once, in the program's output.
+the user, once, in the program's output. So does a `DriveBase.straight()` that turned the robot
+in place: the encoders say it drove, so the program cannot tell, and on the serial-bus build it
+is what a mirrored servo without invert=True does.
 """
 
 import ast
+import functools
 import importlib.abc
 import inspect
+import math
 import sys
 import weakref
 
@@ -25,6 +30,11 @@ SERIAL_BUS_MOTORS = ("ST3032Motor", "ST3215Motor")
 ENCODER_MOTORS = ("JGB37Motor", "MG370Motor")
 CHASSIS_OF = {"st3032": SERIAL_BUS_MOTORS, "jgb37": ENCODER_MOTORS}
 DEFAULT_CHASSIS = "st3032"
+# A straight() whose wheels turned the body this far while carrying it less than this share of the
+# distance asked for turned in place. A straight that drives holds its heading within a degree or
+# two, and a wheel that slips turns less, so neither comes near.
+SPIN_DEG = 45.0
+SPIN_TRAVEL_SHARE = 0.25
 
 
 def constructed_names(source):
@@ -73,8 +83,9 @@ class ProgramRobot:
         self._encoder_pins = weakref.WeakKeyDictionary()  # JGB37Motor -> its encoder A pin
         self._finder = _ConstructorWatch(
             {
-                "openbricks.robotics.drivebase": ("DriveBase", self._drivebase),
+                "openbricks.robotics.drivebase": ("DriveBase", self._drivebase, {"straight": self._straight}),
                 "openbricks.drivers.jgb37_520": ("JGB37Motor", self._encoder_motor),
+                "openbricks.drivers.l298n": ("L298NMotor", self._bridge_motor),
                 "openbricks.drivers.st3215": ("ST3215Motor", self._serial_bus_motor),
                 "openbricks.drivers.tcs34725": ("TCS34725", self._colour_sensor),
             }
@@ -119,6 +130,29 @@ class ProgramRobot:
         self._encoder_pins[motor] = encoder_a
         self._check_build(type(motor).__name__, "jgb37")
 
+    def _bridge_motor(self, _motor, in1, in2, pwm, invert=False, *_args, **_kwargs):
+        self._sim.wiring.build_motor(in1, in2, pwm, invert)
+
+    def _straight(self, straight, drivebase, distance_mm, *args, **kwargs):
+        """Runs the program's straight(); a blocking one that turned the robot in place says so."""
+        physics = self._sim.physics
+        wait = kwargs.get("wait", args[1] if len(args) > 1 else True)
+        before = [physics.wheel_angle_deg(wheel) for wheel in (0, 1)]
+        straight(drivebase, distance_mm, *args, **kwargs)
+        if not wait or "spin" in self._noted:
+            return
+        mm_per_deg = math.pi * physics.chassis.wheel_diameter_mm / 360.0
+        left, right = ((physics.wheel_angle_deg(w) - before[w]) * mm_per_deg for w in (0, 1))
+        turned_deg = math.degrees((left - right) / physics.chassis.axle_track_mm)
+        if abs(turned_deg) < SPIN_DEG or abs(left + right) / 2 >= SPIN_TRAVEL_SHARE * abs(distance_mm):
+            return
+        self._noted.add("spin")
+        self._note(
+            f"sim: straight({distance_mm:g}) turned the robot in place ({abs(turned_deg):.0f} deg) "
+            "instead of driving it: a motor mounted mirrored is likely not inverted; build the right-hand "
+            "motor with invert=True (and only that one)"
+        )
+
     def _serial_bus_motor(self, motor, *_args, **_kwargs):
         self._check_build(type(motor).__name__, "st3032")
 
@@ -148,10 +182,13 @@ def _print_note(line):
 
 
 class _ConstructorWatch(importlib.abc.MetaPathFinder):
-    """Loads the watched runtime modules normally, then wraps one class's __init__ in each."""
+    """Loads the watched runtime modules normally, then wraps one class's __init__ in each (and any
+    methods named with it)."""
 
     def __init__(self, watched):
-        self._watched = watched  # module name -> (class name, before(instance, *args, **kwargs))
+        # module name -> (class name, before(instance, *args, **kwargs)[, {method: around}]); around
+        # is called as around(method, instance, *args, **kwargs) and calls the method itself.
+        self._watched = watched
 
     def find_spec(self, name, path=None, target=None):
         if name not in self._watched:
@@ -170,10 +207,11 @@ class _ConstructorWatch(importlib.abc.MetaPathFinder):
 
 
 class _WrappingLoader(importlib.abc.Loader):
-    def __init__(self, loader, class_name, before):
+    def __init__(self, loader, class_name, before, around=None):
         self._loader = loader
         self._class_name = class_name
         self._before = before
+        self._around = around or {}
 
     def __getattr__(self, name):  # get_source, is_package, ...: the real loader's
         return getattr(self._loader, name)
@@ -186,6 +224,8 @@ class _WrappingLoader(importlib.abc.Loader):
         cls = getattr(module, self._class_name, None)
         if cls is not None:
             _watch(cls, self._before)
+            for name, around in self._around.items():
+                _wrap(cls, name, around)
 
 
 def _watch(cls, before):
@@ -203,3 +243,15 @@ def _watch(cls, before):
 
     __init__.__doc__ = init.__doc__
     cls.__init__ = __init__
+
+
+def _wrap(cls, name, around):
+    method = getattr(cls, name, None)
+    if method is None:
+        return
+
+    @functools.wraps(method)
+    def wrapped(self, *args, **kwargs):
+        return around(method, self, *args, **kwargs)
+
+    setattr(cls, name, wrapped)

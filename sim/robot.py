@@ -5,13 +5,32 @@ RX 41). The DC build (jgb37) has two JGB37-520 motors behind an L298N bridge
 with their quadrature encoders on PCNT units, on the manual's GPIO map.
 
 A real robot is wired the way its program says, so the simulated one is too:
-the motor a program passes to DriveBase as `left` drives the left wheel, and
-the one it builds with `invert=True` is mounted mirrored (`place_wheels`). The
-chassis has exactly one mirrored side, as any robot with two identical motors
-facing outwards does: when a program inverts neither motor (or both), the
-right one stays mirrored and the robot does what that program would make the
-real one do (spin where it meant to drive straight). Until a DriveBase says
-otherwise, servo id 1 and the first bridge channel drive the left wheel.
+the motor a program passes to DriveBase as `left` drives the left wheel
+(`place_wheels`). Which way a motor turns its wheel differs by build, because
+what a builder can change differs:
+
+- Serial bus: a servo turns the way its horn faces and has no leads to swap,
+  so the chassis has exactly one mirrored side, as any robot with two
+  identical motors facing outwards does. The mirrored wheel is the one the
+  program inverts (`mount_signs`); when it inverts neither (or both), the
+  right one stays mirrored and the robot does what that program would make
+  the real one do: spin where it meant to drive straight.
+- DC: a builder wires a mirrored motor with its leads (motor and encoder)
+  swapped, or not and inverts it in the program; either way the robot drives.
+  So each bridge motor is wired to match the driver the program builds on
+  its channel (`bridge_sign`): forward for the driver is forward for the
+  wheel. The manual's listing, inverting neither motor, gets the mirrored
+  right motor with its leads swapped; the bundled example, inverting the
+  right one, gets them as they come. A program that inverts exactly one
+  motor describes a consistent robot whichever one it is (inverting the
+  unmirrored left one says its leads are swapped and the right one's too),
+  and drives straight as that robot would. Until a program builds its
+  drivers (or when nothing watches it build them: a Simulation driven
+  directly), the chassis is the bundled example's: right motor mirrored,
+  leads as they come.
+
+Until a DriveBase says otherwise, servo id 1 and the first bridge channel
+drive the left wheel.
 """
 
 from dataclasses import dataclass
@@ -26,10 +45,10 @@ DEFAULT_MIRRORED = RIGHT
 
 
 def mount_signs(left_invert=False, right_invert=True):
-    """(left, right) shaft-to-wheel signs of a chassis whose program inverts these motors.
+    """(left, right) shaft-to-wheel signs of the serial-bus chassis whose program inverts these servos.
 
-    The mirrored wheel is the one the program inverts; with neither or both inverted the chassis
-    keeps its default, so a self-contradicting program drives the way the real robot would."""
+    A servo cannot be rewired, only turned round: one side is mirrored whatever the program says, so
+    neither or both inverted keeps the default and the robot spins as the real one would."""
     mirrored = DEFAULT_MIRRORED
     if bool(left_invert) != bool(right_invert):
         mirrored = LEFT if left_invert else RIGHT
@@ -46,6 +65,21 @@ class BridgeChannel:
     enable: int
     encoder_a: int
     encoder_b: int
+
+    def swapped(self, in1, in2, enable):
+        """Whether a driver on these pins names IN2 as its IN1; None if they are not this channel."""
+        if enable != self.enable or {in1, in2} != {self.in1, self.in2}:
+            return None
+        return in1 != self.in1
+
+
+def bridge_sign(invert, swapped_pins=False):
+    """Shaft-to-wheel sign of a DC motor wired for the driver the program builds on its channel.
+
+    The leads (motor and encoder together) are connected so that the driver's forward turns the wheel
+    forward: a driver with invert=True, or one that names the channel's IN2 as its IN1, gets them the
+    other way round from one without."""
+    return -1 if bool(invert) != bool(swapped_pins) else 1
 
 
 # Manual 2.7: left IN1/IN2 = 1/2, ENA = 17, encoder 7/8; right IN3/IN4 = 9/10, ENB = 11, encoder 12/13.
@@ -85,6 +119,9 @@ class SerialBusWiring:
         for wheel, servo in enumerate(servos):
             if (servo.io.wheel, servo.io.sign) != (wheel, signs[wheel]):
                 servo.mount(self._physics.wheel_io(wheel, signs[wheel]))
+
+    def build_motor(self, in1, in2, pwm, invert):
+        """A bridge driver on this robot drives nothing: it has no bridge."""
 
     def serial_bus(self, uart_id):
         if uart_id != SERVO_UART:
@@ -141,19 +178,32 @@ class BridgeWiring:
         bridge.io = self._physics.wheel_io(wheel, sign, counts)
         self._board.set_encoder(bridge.channel.encoder_a, _edges(bridge.io, counts))
 
+    def build_motor(self, in1, in2, pwm, invert):
+        """A program builds a bridge driver on (in1, in2, pwm): wire its channel's motor to match it
+        (`bridge_sign`), on whichever wheel the channel drives. Pins of no channel are the driver's
+        business (it drives nothing here)."""
+        for bridge in self.bridges:
+            swapped = bridge.channel.swapped(in1, in2, pwm)
+            if swapped is not None:
+                self._remount(bridge, bridge.io.wheel, bridge_sign(invert, swapped))
+                return
+
     def place_wheels(self, left, right):
         """Mount the motors the program's DriveBase names: `left`/`right` = (encoder_a_pin, invert).
 
-        The motors passed to DriveBase decide which wheel is which, not their pin numbers."""
+        The motors passed to DriveBase decide which wheel is which, not their pin numbers; each keeps
+        the leads its driver was wired with (`build_motor`)."""
         by_pin = {bridge.channel.encoder_a: bridge for bridge in self.bridges}
         bridges = [by_pin.get(pin) if isinstance(pin, int) else None for pin, _ in (left, right)]
         if None in bridges or bridges[0] is bridges[1]:
             return
-        signs = mount_signs(left[1], right[1])
         for wheel, bridge in enumerate(bridges):
-            if (bridge.io.wheel, bridge.io.sign) != (wheel, signs[wheel]):
-                bridge.io.coast()
-                self._mount(bridge, wheel, signs[wheel])
+            self._remount(bridge, wheel, bridge.io.sign)
+
+    def _remount(self, bridge, wheel, sign):
+        if (bridge.io.wheel, bridge.io.sign) != (wheel, sign):
+            bridge.io.coast()
+            self._mount(bridge, wheel, sign)
 
     def serial_bus(self, uart_id):
         raise OSError(f"the simulated DC-motor robot has no serial-bus servos (UART{uart_id})")

@@ -2,6 +2,8 @@
 build its motor drivers need, a colour sensor where it constructs one; and one line where the
 program and a forced build disagree."""
 
+import math
+
 import pytest
 
 from openbricks_sim.program_robot import infer_chassis
@@ -104,3 +106,60 @@ def test_a_bare_colour_sensor_against_a_forced_bare_part_says_so():
     assert result.exit == ERROR  # the VL53L0X answers at 0x29, and the driver says it is not a TCS34725
     assert "not a TCS34725" in result.error
     assert result.output.startswith("sim: the program builds a TCS34725 straight on I2C0")
+
+
+# The manual's DC build: its GPIO table (2.7), each motor built as its full-robot listing (5.6)
+# builds them, neither inverted: a DC builder swaps the mirrored motor's leads instead.
+DC_LISTING_SQUARE = """
+from openbricks.drivers.jgb37_520 import JGB37Motor
+from openbricks.robotics import DriveBase
+
+LEFT_IN1, LEFT_IN2, LEFT_PWM = 1, 2, 17
+LEFT_EA, LEFT_EB = 7, 8
+RIGHT_IN1, RIGHT_IN2, RIGHT_PWM = 9, 10, 11
+RIGHT_EA, RIGHT_EB = 12, 13
+
+left = JGB37Motor(in1=LEFT_IN1, in2=LEFT_IN2, pwm=LEFT_PWM, encoder_a=LEFT_EA, encoder_b=LEFT_EB{left})
+right = JGB37Motor(in1=RIGHT_IN1, in2=RIGHT_IN2, pwm=RIGHT_PWM, encoder_a=RIGHT_EA, encoder_b=RIGHT_EB{right})
+db = DriveBase(left, right, wheel_diameter_mm=65, axle_track_mm=120)
+for side in range(4):
+    db.straight(300)
+    db.turn(90)
+print("odometry", db.distance(), db.angle())
+"""
+
+
+@pytest.mark.parametrize(
+    "left, right",
+    [("", ""), ("", ", invert=True"), (", invert=True", "")],
+    ids=["manual-listing-neither-inverted", "right-inverted", "left-inverted"],
+)
+def test_a_dc_program_drives_its_300_mm_square_however_its_leads_are_wired(left, right):
+    result = run(DC_LISTING_SQUARE.format(left=left, right=right))
+    assert result.job["chassis"] == "jgb37"
+    pose = result.pose
+    assert math.hypot(pose["x_mm"], pose["y_mm"]) < 10.0
+    assert abs((pose["heading_deg"] + 180.0) % 360.0 - 180.0) < 2.0
+    assert "sim:" not in result.output  # the robot did what its program meant: nothing to point out
+
+
+def test_a_straight_that_turns_in_place_names_the_mirrored_motor_in_one_line():
+    source = SERVO_SQUARE_CORNER.format(
+        left_id=1, right_id=2, left_invert=False, right_invert=False, then="db.straight(200)"
+    )
+    result = run_program("mission.py", source=source, limit_ms=15000)
+    notes = [line for line in result.output.splitlines() if line.startswith("sim:")]
+    assert len(notes) == 1, result.output  # once, though both straights spun
+    assert notes[0].startswith("sim: straight(200) turned the robot in place (")
+    assert notes[0].endswith(
+        "instead of driving it: a motor mounted mirrored is likely not inverted; build the right-hand "
+        "motor with invert=True (and only that one)"
+    )
+
+
+def test_a_correct_program_gets_no_note_however_far_it_drives():
+    source = SERVO_SQUARE_CORNER.format(
+        left_id=1, right_id=2, left_invert=False, right_invert=True, then="db.turn(90)\ndb.straight(-300)"
+    )
+    result = run(source)
+    assert "sim:" not in result.output
