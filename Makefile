@@ -94,7 +94,7 @@ $(DOCS_HTML)/index.html: $(DOCS_SOURCES) | $(VENV)/.installed
 docs: $(DOCS_HTML)/index.html
 
 # The sdist and the wheel as a release ships them, into dist/. The console and the manual are brought up
-# to date first: the build backend (build_backend/) builds them only when they are absent, as in a clean
+# to date first: the build backend (build_backend.py) builds them only when they are absent, as in a clean
 # clone. The wheel is built from the sdist, as pip builds it for a user who installs the sdist.
 dist: web docs | $(VENV)/.installed
 	rm -f dist/openbricks-*

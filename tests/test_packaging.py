@@ -39,9 +39,9 @@ FIGURES = ROOT / "build" / "artifacts" / "packaging" / "figures.json"
 
 
 def backend():
-    """The in-tree build backend, imported as the build frontend imports it (from build_backend/)."""
+    """The in-tree build backend, imported as the build frontend imports it (from the root: backend-path)."""
     spec = importlib.util.spec_from_file_location(
-        "openbricks_backend", ROOT / "build_backend" / "openbricks_backend.py"
+        "build_backend", ROOT / "build_backend.py"
     )
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
@@ -188,7 +188,7 @@ def test_the_sdist_carries_the_built_pages_the_examples_and_the_c_sources(releas
         assert page in names, page
     assert any(n.startswith("server/daemon/static/assets/") and n.endswith(".js") for n in names)
     assert "server/keys/firmware_signing.pub" in names
-    assert "build_backend/openbricks_backend.py" in names, "the backend the wheel is built with"
+    assert "build_backend.py" in names, "the backend the wheel is built with"
     examples = sorted(p.relative_to(ROOT).as_posix() for p in (ROOT / "examples").rglob("*.py"))
     assert examples and set(examples) <= names
     # The host extensions' C (setup.py); the wheel is built from this sdist, which proves nothing is missing.
