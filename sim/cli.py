@@ -10,7 +10,9 @@
 Positions follow the manual's simulator chapter: metres on the mat, yaw in degrees counter-clockwise
 from +x (MuJoCo's convention); inside, the simulator works in millimetres with Pybricks' clockwise
 heading. Without the `[sim]` extra (MuJoCo) every command prints how to install it, never a traceback.
-MuJoCo and the worlds are imported only once a command runs, so `--help` stays quick.
+MuJoCo and the worlds are imported only once a command needs them, so `--help` stays quick; a
+contained `sim run` never imports them here at all (nor numpy): its child does, and this process
+only waits for it, so a program that only prints ends as soon as the child has started and run it.
 """
 
 from __future__ import annotations
@@ -27,21 +29,20 @@ from openbricks_sim.job import (
     RANGE_FINDERS,  # noqa: F401 - kept in step with sensors.rig by a test
     WORLD_NAMES,  # noqa: F401 - kept in step with worlds.WORLDS by a test
     JobError,
+    UnknownWorldError,
     add_place_arguments,
     add_run_arguments,
     add_seed_argument,
     job_from_args,
     positive_argument,
     start_pose,
+    world_file,
 )
 from openbricks_sim.program_robot import DEFAULT_CHASSIS
+from openbricks_sim.run_process import INSTALL_HINT
 
 EXIT_OK = 0
 EXIT_FAILED = 1
-INSTALL_HINT = (
-    "the simulator needs MuJoCo, which comes with the [sim] extra: pipx install 'openbricks[sim]' "
-    "(or pip install 'openbricks[sim]')"
-)
 VIEWER_UNAVAILABLE = (
     "the 3D viewer is not available in this version yet; run without it (preview: --headless), or use "
     "--json and plot the result"
@@ -155,7 +156,7 @@ def main(argv: list[str] | None = None) -> int:
         parser.print_help()
         return EXIT_OK
     try:
-        _require_mujoco()
+        _require_mujoco(loaded_here=args.command != "run" or args.no_shim or args.viewer)
         if args.command == "preview":
             return _preview(args)
         if args.command == "sweep":
@@ -166,7 +167,14 @@ def main(argv: list[str] | None = None) -> int:
         return EXIT_FAILED
 
 
-def _require_mujoco() -> None:
+def _require_mujoco(loaded_here: bool) -> None:
+    """The install hint unless MuJoCo is there. A command that loads it in this process imports it
+    to find out; a contained run only looks for it, since only its child needs it (and the child
+    gives the same hint when it is there but does not load)."""
+    if not loaded_here:
+        if importlib.util.find_spec("mujoco") is None:
+            raise SimCliError(f"{INSTALL_HINT} (No module named 'mujoco')")
+        return
     try:
         import mujoco  # noqa: F401
     except ImportError as exc:
@@ -178,10 +186,19 @@ def _start_pose(args, world) -> tuple[float, float, float] | None:
 
 
 def _world(name: str):
-    from openbricks_sim.worlds import UnknownWorldError, resolve
+    from openbricks_sim.worlds import resolve
 
     try:
         return resolve(name)
+    except UnknownWorldError as exc:
+        raise SimCliError(str(exc)) from None
+
+
+def _check_world(name: str) -> None:
+    """A world name or file refused as _world would, without MuJoCo: whether MuJoCo can load an MJCF
+    file is for the child that builds the world to say."""
+    try:
+        world_file(name)
     except UnknownWorldError as exc:
         raise SimCliError(str(exc)) from None
 
@@ -258,16 +275,16 @@ def _run(args) -> int:
     script, source = _program(args.script)
     if args.viewer and _viewer_launcher() is None:
         raise SimCliError(VIEWER_UNAVAILABLE)
-    world = _world(args.world)
     if args.no_shim:
-        return _run_unshimmed(args, world, script, source)
+        return _run_unshimmed(args, _world(args.world), script, source)
+    _check_world(args.world)
     from openbricks_sim.run_flash import HubDirError, prepare_hub_dir
 
     try:
         prepare_hub_dir(args.hub_dir)
     except HubDirError as exc:
         raise SimCliError(str(exc)) from None
-    return _run_contained(args, world, script)
+    return _run_contained(args, script)
 
 
 def _check_syntax(source: str, filename: str) -> None:
@@ -303,21 +320,20 @@ def _sweep(args) -> int:
         raise SimCliError(str(exc)) from None
 
 
-def _run_contained(args, world, script) -> int:
+def _run_contained(args, script) -> int:
     """The program runs in a child process under limits (run_process.py); this process waits, passes
     Ctrl-C on, and prints the JSON summary for --json (the child prints text reports itself)."""
+    from openbricks_sim.job import report
     from openbricks_sim.run_process import run_in_child
 
     try:
-        job = job_from_args(args, str(script))
-    except JobError as exc:
+        job = job_from_args(args, str(script))  # a start option naming part of the pose asks the world
+    except (JobError, UnknownWorldError) as exc:
         raise SimCliError(str(exc)) from None
     result, status = run_in_child(job, viewer=args.viewer, silent=args.json)
     if args.json:
         print(json.dumps(result.summary()))
-    elif "limits" not in result.job:  # the child died without reporting: say why here
-        from openbricks_sim.run import report
-
+    elif "limits" not in result.job:  # the child ended before it could report: say why here
         report(result)
     return status
 

@@ -11,8 +11,10 @@ processes or machines and compare them. Every front end builds a SimJob and noth
 of the job's options), the child process that runs it (`python -m openbricks_sim.run --job`),
 the 3D viewer's session, and the console's daemon (to_dict/from_dict, stored with the run).
 
-This module imports neither MuJoCo nor the runtime, so the CLI's `--help` and the daemon stay
-light; the world is resolved only by job_from_args, when a start pose needs it.
+This module imports neither MuJoCo nor the runtime, so the CLI's `--help`, the daemon and the
+parent of a contained run stay light: `world_file` checks a --world as far as it can without
+MuJoCo (worlds.resolve builds on it), and the world is resolved only by job_from_args, when a
+start option needs its start pose.
 """
 
 from __future__ import annotations
@@ -21,6 +23,7 @@ import argparse
 import json
 import math
 import os
+import sys
 from dataclasses import asdict, dataclass, field, fields, replace
 
 from .limits import DEFAULT_MEMORY_MB, default_cpu_s, default_wall_s
@@ -28,7 +31,8 @@ from .limits import DEFAULT_MEMORY_MB, default_cpu_s, default_wall_s
 CHASSIS_NAMES = ("st3032", "jgb37")
 RANGE_FINDERS = ("vl53l0x", "vl53l1x")  # kept in step with sensors.rig by a test
 BARE_0X29_PARTS = ("tcs34725", "vl53l0x", "vl53l1x")
-WORLD_NAMES = "empty, line_track, zones, arena, wro"  # kept in step with worlds.WORLDS by a test
+WORLD_ALIASES = ("empty", "line_track", "zones", "arena", "wro")  # kept in step with worlds.WORLDS by a test
+WORLD_NAMES = ", ".join(WORLD_ALIASES)
 DEFAULT_LIMIT_MS = 60_000
 
 # How a run ends (SimResult.exit).
@@ -59,6 +63,31 @@ EXIT_STATUS = {
 
 class JobError(ValueError):
     """A job that cannot run as given; the message names the field and what it accepts."""
+
+
+class UnknownWorldError(ValueError):
+    """A --world that names no world: the message says what it accepts."""
+
+
+def world_file(name_or_path: str):
+    """None for a world alias; else the MJCF file it names, as a Path that exists and ends in .xml.
+
+    Whether MuJoCo can load the file is worlds.resolve's to find out: this stays MuJoCo-free."""
+    from pathlib import Path
+
+    if name_or_path in WORLD_ALIASES:
+        return None
+    path = Path(name_or_path)
+    if path.suffix.lower() == ".xml" or path.exists():
+        if not path.is_file():
+            raise UnknownWorldError(f"world file {path} does not exist")
+        if path.suffix.lower() != ".xml":
+            raise UnknownWorldError(
+                f"world file {path} is not an MJCF model: give an .xml file, or a world name"
+            )
+        return path
+    known = ", ".join(sorted(WORLD_ALIASES))
+    raise UnknownWorldError(f"unknown world {name_or_path!r}: use one of {known}, or a path to an MJCF file")
 
 
 @dataclass(frozen=True)
@@ -195,6 +224,27 @@ class SimResult:
             "output": self.output,
             "job": self.job,
         }
+
+
+def report(result: SimResult, stream=None) -> None:
+    """How the run ended, for a person: the error (if any), then one summary line, on `stream`
+    (stderr by default: stdout carries the program's own output)."""
+    stream = sys.stderr if stream is None else stream
+    if result.error:
+        stream.write(result.error if result.error.endswith("\n") else result.error + "\n")
+    line = f"[{result.exit}] {result.sim_ms / 1000:.3f} s simulated in {result.wall_s:.2f} s"
+    if result.real_time_factor is not None:
+        line += f" ({result.real_time_factor}x real time)"
+    pose = result.pose
+    if pose:
+        line += (
+            f"; robot at x={pose['x_mm']:.1f} mm y={pose['y_mm']:.1f} mm "
+            f"heading={pose['heading_deg']:.2f} deg"
+        )
+    stream.write(line + "\n")
+    if result.score is not None:
+        stream.write(f"score: {json.dumps(result.score)}\n")
+    stream.flush()
 
 
 def _check(ok, name, accepts):
@@ -366,7 +416,9 @@ def job_from_args(args, program: str) -> SimJob:
     """The SimJob the options parsed by add_*_arguments describe. Resolves the world (raising
     worlds.UnknownWorldError) only when a start option needs its start pose."""
     start = None
-    if args.x is not None or args.y is not None or args.yaw is not None:
+    if None not in (args.x, args.y, args.yaw):  # the whole pose given: no world to ask
+        start = start_pose(args, (0.0, 0.0, 0.0))
+    elif args.x is not None or args.y is not None or args.yaw is not None:
         from .worlds import resolve
 
         start = start_pose(args, resolve(args.world).start_mm_deg)

@@ -46,10 +46,12 @@ from .job import (
     JobError,
     SimJob,
     SimResult,
+    UnknownWorldError,
     add_place_arguments,
     add_run_arguments,
     add_seed_argument,
     job_from_args,
+    report,
 )
 from .limits import CpuLimitExceeded, contain
 from .program_robot import ProgramRobot, infer_chassis
@@ -220,27 +222,6 @@ LIMIT_MESSAGES = {
 }
 
 
-def report(result, stream=None) -> None:
-    """How the run ended, for a person: the error (if any), then one summary line, on `stream`
-    (stderr by default: stdout carries the program's own output)."""
-    stream = sys.stderr if stream is None else stream
-    if result.error:
-        stream.write(result.error if result.error.endswith("\n") else result.error + "\n")
-    line = f"[{result.exit}] {result.sim_ms / 1000:.3f} s simulated in {result.wall_s:.2f} s"
-    if result.real_time_factor is not None:
-        line += f" ({result.real_time_factor}x real time)"
-    pose = result.pose
-    if pose:
-        line += (
-            f"; robot at x={pose['x_mm']:.1f} mm y={pose['y_mm']:.1f} mm "
-            f"heading={pose['heading_deg']:.2f} deg"
-        )
-    stream.write(line + "\n")
-    if result.score is not None:
-        stream.write(f"score: {json.dumps(result.score)}\n")
-    stream.flush()
-
-
 def with_source(job: SimJob, source=None) -> tuple[SimJob, str]:
     """(the job with its chassis resolved, the program's text): read from job.program unless given,
     the build the program's motor drivers describe when the job names none."""
@@ -335,12 +316,19 @@ def main(argv=None) -> int:
     stdout = sys.stdout
     echo = None if args.json else _echo_to(stdout)
     on_result = None if args.json else report
-    if args.viewer:
-        from .viewer import print_url, serve_run
+    try:
+        if args.viewer:
+            from .viewer import print_url, serve_run
 
-        result = serve_run(job, echo=echo, on_ready=print_url, on_result=on_result)
-    else:
-        result = run_job(job, echo=echo)
+            result = serve_run(job, echo=echo, on_ready=print_url, on_result=on_result)
+        else:
+            result = run_job(job, echo=echo)
+            if on_result is not None:
+                on_result(result)
+    except UnknownWorldError as exc:  # an MJCF file MuJoCo cannot load: the CLI only saw it exists
+        result = SimResult(
+            exit=ERROR, sim_ms=0, wall_s=0.0, pose={}, output="", error=str(exc), job=job.to_dict()
+        )
         if on_result is not None:
             on_result(result)
     signal.signal(signal.SIGXCPU, signal.SIG_IGN)  # the result is out: only the hard limit remains

@@ -27,16 +27,25 @@ import time
 
 from .job import CPU_LIMIT, ERROR, EXIT_STATUS, STOPPED, WALL_LIMIT, SimJob, SimResult
 
+INSTALL_HINT = (
+    "the simulator needs MuJoCo, which comes with the [sim] extra: pipx install 'openbricks[sim]' "
+    "(or pip install 'openbricks[sim]')"
+)
 GRACE_S = 10.0  # start-up (imports, the world's build) plus the child's own wall-limit handling
 FORWARDED_SIGNALS = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
 # `python -m openbricks_sim.run`, except that a Ctrl-C while the simulator still imports ends the
-# child quietly instead of with a traceback of numpy's start-up.
+# child quietly instead of with a traceback of numpy's start-up, and a MuJoCo that is there but
+# does not load (a missing system library) is the run's result with the install hint: the CLI
+# only looked for MuJoCo, it did not import it.
 CHILD_MAIN = (
     "import sys\n"
     "try:\n"
     "    from openbricks_sim.run import main\n"
     "except KeyboardInterrupt:\n"
     "    sys.exit(130)\n"
+    "except ImportError as exc:\n"
+    "    from openbricks_sim.run_process import report_import_error\n"
+    "    sys.exit(report_import_error(exc, sys.argv[1:]))\n"
     "sys.exit(main(sys.argv[1:]))\n"
 )
 
@@ -169,3 +178,23 @@ def _lost_result(returncode, wall_s, killed_for_time, interrupted, wall_limit_s,
         where = "" if quiet else " (its messages are above)"
         error = f"the simulator's process {how} without a result{where}"
     return SimResult(exit=exit_reason, sim_ms=0, wall_s=wall_s, pose={}, output="", error=error)
+
+
+def report_import_error(exc: ImportError, child_args: list[str]) -> int:
+    """In a child whose simulator failed to import: a MuJoCo that does not load is the run's result,
+    the install hint with MuJoCo's own reason, sent back like any other; anything else is a bug,
+    raised as it is."""
+    try:
+        import mujoco  # noqa: F401 - the import is the question
+    except ImportError as mujoco_exc:
+        reason = mujoco_exc
+    else:
+        raise exc
+    job = json.loads(child_args[child_args.index("--job") + 1])
+    result = SimResult(
+        exit=ERROR, sim_ms=0, wall_s=0.0, pose={}, output="", error=f"{INSTALL_HINT} ({reason})", job=job
+    )
+    fd = int(child_args[child_args.index("--result-fd") + 1])
+    with os.fdopen(fd, "w", encoding="utf-8") as out:
+        out.write(result.to_json() + "\n")
+    return EXIT_STATUS[ERROR]

@@ -8,10 +8,10 @@ suggests (or the one the user gives).
 
 from collections.abc import Callable
 from dataclasses import dataclass
-from pathlib import Path
 
 import mujoco
 
+from ..job import UnknownWorldError, world_file
 from . import arena, empty, line_track, wro, zones
 from .scoring import FinalState, Scoring, final_state
 
@@ -60,26 +60,15 @@ WORLDS: dict[str, World] = {
 __all__ = ["WORLDS", "FinalState", "Scoring", "UnknownWorldError", "World", "final_state", "resolve"]
 
 
-class UnknownWorldError(ValueError):
-    pass
-
-
 def resolve(name_or_path: str) -> World:
     """An alias from WORLDS, or an MJCF file (its own floor and props; start at the origin)."""
     if name_or_path in WORLDS:
         return WORLDS[name_or_path]
-    path = Path(name_or_path)
-    if path.suffix.lower() == ".xml" or path.exists():
-        if not path.is_file():
-            raise UnknownWorldError(f"world file {path} does not exist")
-        if path.suffix.lower() != ".xml":
-            raise UnknownWorldError(
-                f"world file {path} is not an MJCF model: give an .xml file, or a world name"
-            )
-        try:
-            mujoco.MjSpec.from_file(str(path))
-        except ValueError as exc:  # MuJoCo's parser: the file, line and what is wrong
-            raise UnknownWorldError(f"world file {path} is not a model MuJoCo can load: {exc}") from None
-        return World(path.stem, f"MJCF file {path}", lambda _seed: mujoco.MjSpec.from_file(str(path)))
-    known = ", ".join(sorted(WORLDS))
-    raise UnknownWorldError(f"unknown world {name_or_path!r}: use one of {known}, or a path to an MJCF file")
+    path = world_file(name_or_path)  # what can be told without MuJoCo, told the same way everywhere
+    if path is None:  # an alias of job.WORLD_ALIASES that WORLDS lacks: a test keeps them in step
+        raise UnknownWorldError(f"unknown world {name_or_path!r}")
+    try:
+        mujoco.MjSpec.from_file(str(path))
+    except ValueError as exc:  # MuJoCo's parser: the file, line and what is wrong
+        raise UnknownWorldError(f"world file {path} is not a model MuJoCo can load: {exc}") from None
+    return World(path.stem, f"MJCF file {path}", lambda _seed: mujoco.MjSpec.from_file(str(path)))

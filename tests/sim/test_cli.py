@@ -97,6 +97,41 @@ def test_user_errors_are_one_line(program):
     assert done.returncode == 1 and "missing.py: no such program file" in done.stderr
 
 
+def test_a_world_file_is_refused_in_one_line_by_whichever_process_can_tell(program, tmp_path):
+    done = sim("run", str(program), "--world", str(tmp_path / "missing.xml"))
+    assert done.returncode == 1 and f"world file {tmp_path / 'missing.xml'} does not exist" in done.stderr
+    bad = tmp_path / "bad.xml"
+    bad.write_text("<mujoco><worldbody><geom type='nonsense'/></worldbody></mujoco>\n")
+    # Only MuJoCo can tell the file is no model: the run's process, which loads it, says so.
+    done = sim("run", str(program), "--world", str(bad))
+    assert done.returncode == 1 and f"world file {bad} is not a model MuJoCo can load: " in done.stderr
+    assert "Traceback" not in done.stderr and done.stdout == ""  # the program never started
+    done = sim("run", str(program), "--world", str(bad), "--json")
+    result = json.loads(done.stdout)
+    assert result["exit"] == "error" and "is not a model MuJoCo can load" in result["error"]
+
+
+# `openbricks sim run` as the console script runs it, telling which of MuJoCo and numpy the CLI's
+# own process imported by the time it exits.
+PARENT_IMPORTS = """
+import atexit, sys
+heavy = lambda: sorted({name.split(".")[0] for name in sys.modules} & {"mujoco", "numpy"})
+atexit.register(lambda: print("parent imported:", heavy(), file=sys.stderr))
+from openbricks_server.cli import main
+sys.exit(main(["sim", "run", sys.argv[1]]))
+"""
+
+
+def test_the_cli_process_of_a_run_imports_neither_mujoco_nor_numpy(tmp_path):
+    hello = tmp_path / "hello.py"
+    hello.write_text("print('hello')\n")
+    done = subprocess.run(
+        [sys.executable, "-c", PARENT_IMPORTS, str(hello)], capture_output=True, text=True, timeout=120
+    )
+    assert done.returncode == 0 and done.stdout == "hello\n", done.stderr
+    assert done.stderr.splitlines()[-1] == "parent imported: []"  # the child imported them, not us
+
+
 def test_preview_headless_is_a_smoke_test():
     # Without --headless, preview serves the 3D view: tests/sim/viewer/test_cli_viewer.py.
     done = sim("preview", "--headless", "--world", "line_track", "--duration", "0.5")
