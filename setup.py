@@ -10,6 +10,8 @@ from glob import glob
 from setuptools import Extension, find_packages, setup
 
 PACKAGE_FOLDERS = {"openbricks": "openbricks", "openbricks_server": "server", "openbricks_sim": "sim"}
+# The example programs the console offers (openbricks_server.examples reads them from here when installed).
+EXAMPLES = {"openbricks_server.example_programs": "examples"}
 NATIVE = "firmware/native"
 # Emulated servos in C, for the simulator and the unix port's tests (not built into a hub).
 EMULATION = f"{NATIVE}/user_c_modules/openbricks_bench"
@@ -20,13 +22,17 @@ def packages() -> list[str]:
     for name, folder in PACKAGE_FOLDERS.items():
         names.append(name)
         names.extend(f"{name}.{sub}" for sub in find_packages(folder))
-    return names
+    return names + list(EXAMPLES)
 
 
 setup(
     packages=packages(),
-    package_dir=PACKAGE_FOLDERS,
-    exclude_package_data={"openbricks_sim": ["native/*", "native/*/*"]},
+    package_dir={**PACKAGE_FOLDERS, **EXAMPLES},
+    exclude_package_data={
+        "openbricks_sim": ["native/*", "native/*/*"],
+        # Computer-side scripts and the printed manual's verbatim listings: not programs to offer a hub.
+        "openbricks_server.example_programs": ["host/*", "manual/*"],
+    },
     ext_modules=[
         Extension(
             "openbricks_native",

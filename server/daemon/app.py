@@ -34,6 +34,7 @@ from openbricks_server.daemon.recorder import INTERRUPTED_BY_CRASH, Recorder
 from openbricks_server.daemon.routers import auth as auth_router
 from openbricks_server.daemon.routers import competition as competition_router
 from openbricks_server.daemon.routers import events as events_router
+from openbricks_server.daemon.routers import examples as examples_router
 from openbricks_server.daemon.routers import flash as flash_router
 from openbricks_server.daemon.routers import hubs as hubs_router
 from openbricks_server.daemon.routers import jobs as jobs_router
@@ -139,6 +140,7 @@ ROUTERS = [
     system.router,
     auth_router.router,
     programs.router,
+    examples_router.router,
     runs.router,
     events_router.router,
     hubs_router.router,
