@@ -110,10 +110,21 @@ def _add_flash(sub):
     p = sub.add_parser(
         "flash",
         help="write a firmware image to a hub over USB and give the hub its name",
+        # The epilog's commands stay one per line here, and are a literal block (`::`) in the manual.
+        formatter_class=argparse.RawDescriptionHelpFormatter,
         description=(
-            "Write a firmware image to a hub over USB (esptool runs as a separate process), then store the "
-            "hub's Bluetooth name in its NVS and read it back. --name is required: hubs that share a name "
-            "cannot be told apart over Bluetooth."
+            "Write a firmware image to a hub over USB (esptool runs as a separate process),\n"
+            "then store the hub's Bluetooth name in its NVS and read it back. --name is\n"
+            "required: hubs that share a name cannot be told apart over Bluetooth."
+        ),
+        epilog=(
+            "No firmware release has been published yet: build the image, then flash it. The\n"
+            "steps are in `openbricks docs firmware`; from an openbricks checkout, with a\n"
+            "MicroPython checkout and ESP-IDF set up::\n"
+            "\n"
+            "  firmware/build_firmware.sh esp32s3 ~/micropython    # esp32: a classic ESP32\n"
+            "  openbricks flash --name RobotA \\\n"
+            "    --firmware ~/micropython/ports/esp32/build-openbricks_esp32s3/firmware.bin"
         ),
     )
     p.add_argument(
@@ -128,9 +139,12 @@ def _add_flash(sub):
     )
     p.add_argument(
         "--firmware",
+        metavar="FILE",
         help=(
-            "Firmware image (.bin) to write, e.g. your own build or a downloaded release. Omit it to "
-            "download the newest release for the detected chip (cached under ~/.cache/openbricks/firmware)."
+            "Firmware image (.bin) to write: the firmware.bin that firmware/build_firmware.sh built. "
+            "Without it, a release image is used only if one is cached (~/.cache/openbricks/firmware) or "
+            "OPENBRICKS_RELEASES_URL names a releases location; with neither, the command stops at once "
+            "and says how to build one."
         ),
     )
     p.add_argument(

@@ -5,7 +5,7 @@ Two roots, each overridable so tests (and users with odd setups) can move them:
 - the data dir (``OPENBRICKS_DATA_DIR``; default ``~/.local/share/openbricks`` on Linux): state that must
   survive, such as hub locks and the virtual-hub registry;
 - the cache dir (``OPENBRICKS_CACHE_DIR``; default ``~/.cache/openbricks``): things that can be fetched
-  again, such as downloaded firmware releases and rendered docs;
+  again, such as fetched firmware releases and rendered docs;
 - the runtime dir (``OPENBRICKS_RUNTIME_DIR``; default ``$XDG_RUNTIME_DIR/openbricks`` on Linux): what
   only lives while a process runs, such as the console daemon's URL and local token.
 
@@ -36,7 +36,7 @@ def data_dir() -> Path:
 
 
 def cache_dir() -> Path:
-    """Root of what can be rebuilt or downloaded again."""
+    """Root of what can be rebuilt or fetched again."""
     import platformdirs
 
     return _from_env_or(CACHE_DIR_ENV, lambda: platformdirs.user_cache_path(APP_NAME, appauthor=False))
@@ -75,5 +75,6 @@ def virtual_hubs_dir() -> Path:
 
 
 def firmware_cache_dir() -> Path:
-    """Downloaded firmware releases, by version."""
-    return ensure(cache_dir() / "firmware")
+    """Fetched firmware releases, by version; not created here, so that looking finds nothing rather
+    than leaving an empty folder behind."""
+    return cache_dir() / "firmware"

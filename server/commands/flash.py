@@ -20,6 +20,7 @@ from openbricks_server.flash.flasher import (
 )
 from openbricks_server.flash.image import inspect_image
 from openbricks_server.flash.ports import find_esp_port, missing_port
+from openbricks_server.flash.releases import find_releases
 
 
 class _TerminalReport:
@@ -42,14 +43,17 @@ def main(args) -> int:
     name = validate_hub_name(args.name)
     # A given image is checked before any port is opened: a typo in the path is known at once.
     given = inspect_image(args.firmware) if args.firmware else None
+    problem = missing_port(args.port) if args.port else None
+    if problem:
+        raise CliError(f"--port {args.port}: {problem}")
+    # Without an image, what can be flashed is known before any port is opened: with no release reachable
+    # and none cached, the command stops here, in a moment, saying how to build an image.
+    releases = None if given else find_releases(None if args.chip == "auto" else args.chip)
     steps = Steps(args.verbose)
     if len(name) > RECOMMENDED_NAME_CHARS:
         steps.note(
             f"note: names of {RECOMMENDED_NAME_CHARS} characters or fewer show in full in every scanner"
         )
-    problem = missing_port(args.port) if args.port else None
-    if problem:
-        raise CliError(f"--port {args.port}: {problem}")
     port = args.port or find_esp_port()
     console_client.refuse_held_port(port, "flash it from the console (its Flash page, or POST /api/flash)")
     steps.step(f"port {port}" + ("" if args.port else " (the only ESP device connected)"))
@@ -57,6 +61,7 @@ def main(args) -> int:
         port=port,
         name=name,
         image=given,
+        releases=releases,
         chip=args.chip,
         baud=args.baud,
         skip_erase=args.skip_erase,

@@ -1,1 +1,2 @@
-"""`openbricks flash`: image inspection, signature check, release download, esptool, naming the hub."""
+"""`openbricks flash`: image inspection, signature check, releases (cached or from a set location),
+esptool, naming the hub."""

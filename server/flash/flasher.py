@@ -2,11 +2,12 @@
 
 Steps, each reported to a `Reporter` (the CLI prints them on stderr; the daemon turns them into job
 events): read the firmware already on the hub (version and provenance, through its raw REPL), probe the
-chip with esptool, pick the image (the given file or the newest release for that chip) and check it is
-built for this chip, verify its signature, refuse the same or an older version unless the caller allows
-it (the CLI asks; the daemon takes `allow_downgrade`), erase, write (with progress), wait for the reboot,
-write the hub name to NVS and read it back, store the provenance verdict, optionally the starter QTR
-calibration, then reset so the hub advertises its new name.
+chip with esptool, pick the image (the given file, or the newest release for that chip from the releases
+the caller found before opening the port) and check it is built for this chip, verify its signature,
+refuse the same or an older version unless the caller allows it (the CLI asks; the daemon takes
+`allow_downgrade`), erase, write (with progress), wait for the reboot, write the hub name to NVS and read
+it back, store the provenance verdict, optionally the starter QTR calibration, then reset so the hub
+advertises its new name.
 
 The hub's lock (`hub_lock(name)`) is held throughout, so no other openbricks command talks to it meanwhile.
 """
@@ -22,6 +23,7 @@ from typing import Protocol
 from openbricks_server.errors import CliError, UsageError
 from openbricks_server.flash.esptool_runner import Esptool, chip_name
 from openbricks_server.flash.image import FirmwareImage, ImageError, inspect_image, parse_version
+from openbricks_server.flash.releases import MANIFEST_NAME, Releases, find_releases, newest_release
 from openbricks_server.flash.signing import public_key_path, signature_path, verify_file
 
 MAX_NAME_BYTES = 26  # what fits in a legacy BLE advertisement next to the flags
@@ -53,7 +55,8 @@ class Reporter(Protocol):
 class FlashRequest:
     port: str
     name: str
-    image: FirmwareImage | None = None  # None: the newest release for the detected chip
+    image: FirmwareImage | None = None  # None: the newest release for the detected chip, from `releases`
+    releases: Releases | None = None  # found by the caller before opening the port (None: looked up here)
     chip: str = "auto"  # what the caller expects ("auto": whatever esptool finds)
     baud: int = DEFAULT_BAUD
     skip_erase: bool = False
@@ -135,7 +138,9 @@ async def _flash(request, report: Reporter, confirm_older, echo) -> FlashResult:
         )
 
     image, release_note = (
-        (request.image, "") if request.image is not None else await _newest_release(chip, report)
+        (request.image, "")
+        if request.image is not None
+        else await _newest_release(chip, request.releases, report)
     )
     if image.chip != chip:
         raise ImageError(
@@ -180,12 +185,17 @@ async def _flash(request, report: Reporter, confirm_older, echo) -> FlashResult:
     )
 
 
-async def _newest_release(chip: str, report: Reporter) -> tuple[FirmwareImage, str]:
-    from openbricks_server.flash.releases import newest_release, releases_url
-
-    report.step(f"newest release for {chip}")
-    report.detail(f"release index {releases_url()}")
-    release = await asyncio.to_thread(newest_release, chip, report.note)
+async def _newest_release(
+    chip: str, releases: Releases | None, report: Reporter
+) -> tuple[FirmwareImage, str]:
+    if releases is None:
+        releases = await asyncio.to_thread(find_releases, chip)
+    if releases.url is None:
+        report.step(f"cached release for {chip}")
+    else:
+        report.step(f"newest release for {chip}")
+        report.detail(f"release index {releases.url}/{MANIFEST_NAME}")
+    release = await asyncio.to_thread(newest_release, chip, releases, report.note)
     report.note(f"version {release.version} ({'downloaded' if release.downloaded else 'cached'})")
     report.detail(f"cache {release.image}")
     image = inspect_image(release.image)

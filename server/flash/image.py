@@ -93,8 +93,8 @@ def inspect_bytes(data: bytes, path: Path) -> FirmwareImage:
         if other:
             raise ImageError(
                 f"{path.name} says it is for {chip} (written at 0x{offset:x}) but its partition table "
-                f"sits where an image for 0x{other[0]:x} has it: the file is inconsistent; rebuild it or "
-                "download a release"
+                f"sits where an image for 0x{other[0]:x} has it: the file is inconsistent; rebuild it "
+                "with firmware/build_firmware.sh"
             )
         raise ImageError(
             f"{path.name} has no partition table at 0x8000 or 0x9000 of flash: it is not a complete firmware "

@@ -1,6 +1,7 @@
 """The Flash and Servo-ID pages in Debian's Chromium against a real `openbricks console`: a USB hub (a
 virtual hub's pty given with --serial, the fake esptool standing in for the chip work) and an unplugged
-port flashed at once from the page, progress to 100 % and a result per port, both jobs in the History
+port flashed at once from the page (after a flash with no image chosen and no release to take was refused
+with how to build one), progress to 100 % and a result per port, both jobs in the History
 page's Jobs (live, and after a reload); a servo re-ID through a virtual hub, read back; a viewer can
 change neither."""
 
@@ -22,6 +23,8 @@ pytestmark = pytest.mark.e2e
 @pytest.fixture
 def usb_console(tmp_path, board, fake_esptool, monkeypatch):  # noqa: F811 - the fixture, used
     monkeypatch.setenv("FAKE_ESPTOOL_WRITE_S", "3")  # long enough to watch the bar move
+    monkeypatch.setenv("OPENBRICKS_CACHE_DIR", str(tmp_path / "cache"))  # no release cached ...
+    monkeypatch.delenv("OPENBRICKS_RELEASES_URL", raising=False)  # ... and none to fetch
     console = start_console(tmp_path / "console", virtual=1, extra=["--serial", board.pty])
     try:
         console.wait_hubs_idle(2)
@@ -61,6 +64,12 @@ def test_flash_two_ports_from_the_page_one_succeeds_one_fails_alone(
     ghost = page.locator("[data-testid=flash-row][data-port='/dev/ttyUSB97']")
     assert page.get_by_role("button", name="Flash selected (2)").is_disabled()  # a name is missing
     ghost.locator("input[type=text]").fill("Ghost")
+    assert "firmware/build_firmware.sh" in page.locator("[data-testid=firmware]").inner_text()
+    page.get_by_role("button", name="Flash selected (2)").click()  # no image chosen, no release to take
+    refused = page.locator(".notice", has_text="no firmware image")
+    refused.wait_for()
+    assert "firmware/build_firmware.sh" in refused.inner_text()
+    assert ghost.locator("[data-testid=flash-state]").count() == 0  # nothing started
     page.set_input_files("input[aria-label='Firmware image']", str(image))
     page.locator("[data-testid=firmware]", has_text="esp32s3, version 2.8.0, written at 0x0").wait_for()
     page.get_by_role("button", name="Flash selected (2)").click()

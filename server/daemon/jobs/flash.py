@@ -5,8 +5,9 @@ turned into job events. A port fails alone: its job says why; the others go on.
 A hub whose link goes through the port being flashed (a USB hub the console holds) is handed over for
 the job: its link is closed, it shows `flashing`, and it reconnects afterwards under its new name.
 
-Firmware is the newest release for each board's chip (downloaded once, or the cached one), or a file
-uploaded first (`store_upload`), kept under the data dir by its content hash.
+Firmware is a file uploaded first (`store_upload`), kept under the data dir by its content hash, or else
+the newest release for each board's chip, from the releases the request found (`find_releases`: a cached
+image, or one from OPENBRICKS_RELEASES_URL) before any job started.
 """
 
 from __future__ import annotations
@@ -26,6 +27,7 @@ from openbricks_server.flash.esptool_runner import Esptool
 from openbricks_server.flash.flasher import FlashRequest, flash_hub, older_version_refusal
 from openbricks_server.flash.image import FirmwareImage, inspect_bytes, inspect_image
 from openbricks_server.flash.ports import missing_port
+from openbricks_server.flash.releases import Releases
 
 UPLOADS_DIR = "firmware-uploads"
 MAX_FIRMWARE_BYTES = 16 * 1024 * 1024  # the largest ESP32 flash
@@ -99,9 +101,15 @@ class FlashJobs:
     # -- jobs -------------------------------------------------------------------------------------------
 
     def start(
-        self, targets: list[FlashTarget], image: FirmwareImage | None, allow_downgrade: bool, who: str
+        self,
+        targets: list[FlashTarget],
+        image: FirmwareImage | None,
+        allow_downgrade: bool,
+        who: str,
+        releases: Releases | None = None,
     ) -> tuple[str, list[Job]]:
-        """One job per target, all started now (at most `parallel` flash at once); returns (batch, jobs)."""
+        """One job per target, all started now (at most `parallel` flash at once); returns (batch, jobs).
+        Without `image`, each board gets the newest release for its chip from `releases`."""
         batch = str(ULID())
         started = []
         for target in targets:
@@ -112,18 +120,18 @@ class FlashJobs:
                 "allow_downgrade": allow_downgrade,
             }
             job = self.jobs.create("flash", target.port, who, params, batch)
-            self.jobs.start(job, lambda job, t=target: self._flash(job, t, image, allow_downgrade))
+            self.jobs.start(job, lambda job, t=target: self._flash(job, t, image, releases, allow_downgrade))
             started.append(job)
         return batch, started
 
-    async def _flash(self, job: Job, target: FlashTarget, image, allow_downgrade: bool) -> dict:
+    async def _flash(self, job: Job, target: FlashTarget, image, releases, allow_downgrade: bool) -> dict:
         async with self._slots:
             self.jobs.running(job)
             problem = await asyncio.to_thread(missing_port, target.port)
             if problem:
                 raise JobFailed(f"{target.port}: {problem}")
             report = _JobReport(self.jobs, job)
-            request = FlashRequest(port=target.port, name=target.name, image=image)
+            request = FlashRequest(port=target.port, name=target.name, image=image, releases=releases)
             confirm = (lambda _question: None) if allow_downgrade else older_version_refusal(DOWNGRADE_HINT)
             if target.actor is None:
                 result = await flash_hub(request, report, confirm, echo=report.detail)

@@ -1,7 +1,7 @@
-"""Flashing hubs over USB: upload a firmware image (or use the newest release), then flash any number of
-ports at once, one job per port, with the CLI's safety gates (the image must be built for the board's chip
-and carry its partition table where that chip boots from; the same or an older version than the hub runs
-is refused unless `allow_downgrade`). A script can flash twenty ports and read twenty results:
+"""Flashing hubs over USB: upload a firmware image (or use a cached or reachable release), then flash any
+number of ports at once, one job per port, with the CLI's safety gates (the image must be built for the
+board's chip and carry its partition table where that chip boots from; the same or an older version than
+the hub runs is refused unless `allow_downgrade`). A script can flash twenty ports and read twenty results:
 
     POST /api/flash {"targets": [{"port": "/dev/ttyUSB0", "name": "RobotA"}, ...]}
     GET  /api/flash/{job}?wait_s=120     (each job's steps, progress and result)
@@ -10,6 +10,8 @@ Progress arrives on the event stream as `job_progress` events, state changes as 
 """
 
 from __future__ import annotations
+
+import asyncio
 
 from fastapi import APIRouter, Depends, Query, Request
 from pydantic import BaseModel, Field
@@ -22,11 +24,13 @@ from openbricks_server.daemon.jobs.flash import MAX_FIRMWARE_BYTES, FlashTarget,
 from openbricks_server.daemon.routers.jobs import JobOut, JobRef, WaitQuery, find_job, registry
 from openbricks_server.errors import CliError
 from openbricks_server.flash.flasher import validate_hub_name
+from openbricks_server.flash.releases import NoFirmwareError, find_releases
 
 router = APIRouter(prefix="/flash", tags=["flash"], dependencies=[Depends(require_viewer)])
 
 MAX_TARGETS = 64
 FLASH_ALLOWED = Depends(unlocked("flash firmware"))  # operators, unless competition mode locks it
+UPLOAD_GIVE = "upload one (POST /api/flash/firmware, or the Flash page's Firmware field) and send its id"
 
 
 class Target(BaseModel):
@@ -42,7 +46,12 @@ class Target(BaseModel):
 class FlashBody(BaseModel):
     targets: list[Target] = Field(min_length=1, max_length=MAX_TARGETS)
     firmware: str | None = Field(
-        None, max_length=40, description="an uploaded image's id; default: the newest release for each chip"
+        None,
+        max_length=40,
+        description=(
+            "an uploaded image's id; default: the newest release for each chip, if one is cached or "
+            "OPENBRICKS_RELEASES_URL names a releases location (else the request is refused: no_firmware)"
+        ),
     )
     allow_downgrade: bool = Field(
         False, description="flash even when the image is the same or an older version than the hub runs"
@@ -165,10 +174,11 @@ async def upload_firmware(
 @router.post("", response_model=FlashStarted)
 async def start_flash(body: FlashBody, request: Request, caller: Caller = FLASH_ALLOWED) -> FlashStarted:
     """Flash every target at once (one job per port; at most the console's limit run together, the rest
-    wait their turn). Answers at once with the jobs; follow them on the event stream or GET each one."""
+    wait their turn). Answers at once with the jobs; follow them on the event stream or GET each one.
+    Without `firmware` and with no release to take, nothing starts: the answer says how to get an image."""
     flash = _flash(request)
     targets = _targets(request, body)
-    image = None
+    image = releases = None
     if body.firmware is not None:
         try:
             image = flash.uploaded(body.firmware)
@@ -178,7 +188,14 @@ async def start_flash(body: FlashBody, request: Request, caller: Caller = FLASH_
             raise ApiError.not_found(
                 f"firmware {body.firmware!r}", "upload it with POST /api/flash/firmware, or leave it out"
             )
-    batch, jobs = flash.start(targets, image, body.allow_downgrade, caller.label)
+    else:
+        try:
+            releases = await asyncio.to_thread(find_releases, None, UPLOAD_GIVE)
+        except NoFirmwareError as exc:
+            raise ApiError.conflict(
+                "no_firmware", str(exc), "build the image, then upload its firmware.bin"
+            ) from None
+    batch, jobs = flash.start(targets, image, body.allow_downgrade, caller.label, releases)
     return FlashStarted(batch=batch, jobs=[JobOut(**job.record()) for job in jobs])
 
 

@@ -3,6 +3,10 @@ the board's USB port (so the name and provenance really go through the hub's raw
 are built by the test for both chips and signed with a key pair of its own."""
 
 import os
+import subprocess
+import sys
+import time
+from pathlib import Path
 
 import pytest
 
@@ -102,6 +106,37 @@ def test_names_that_cannot_be_advertised_are_refused(tmp_path, board, keys, fake
     done = cli(env, "flash", "--name", "x" * 30, "--port", board.pty)
     assert done.returncode == 2 and "a Bluetooth advertisement carries at most 26" in done.stderr
     assert fake_esptool.calls() == []
+
+
+def test_with_no_image_anywhere_flash_stops_at_once_saying_how_to_build_one(tmp_path, fake_esptool):
+    """No --firmware, no release cached, no releases location: the installed command ends before it
+    looks for a port, in one line that says to build an image or pass one."""
+    home = tmp_path / "home"
+    home.mkdir()
+    env = {
+        "PATH": os.environ["PATH"],
+        "HOME": str(home),
+        "OPENBRICKS_CACHE_DIR": str(home / "cache"),
+        "OPENBRICKS_DATA_DIR": str(home / "data"),
+        "OPENBRICKS_RUNTIME_DIR": str(home / "run"),
+        "OPENBRICKS_ESPTOOL": os.environ["OPENBRICKS_ESPTOOL"],  # records any chip work, should any start
+        "FAKE_ESPTOOL_LOG": os.environ["FAKE_ESPTOOL_LOG"],
+    }
+    command = Path(sys.executable).with_name("openbricks")  # the console script, as a user runs it
+    started = time.monotonic()
+    done = subprocess.run(
+        [str(command), "flash", "--name", "X"], capture_output=True, text=True, env=env, timeout=30
+    )
+    took_s = time.monotonic() - started
+    assert done.returncode == 1, done.stderr
+    lines = done.stderr.splitlines()
+    assert len(lines) == 1 and done.stdout == "", done.stderr
+    assert lines[0].startswith("openbricks flash: error: no firmware image: ")
+    assert "firmware/build_firmware.sh" in lines[0] and "--firmware" in lines[0]
+    assert "Traceback" not in done.stderr
+    assert fake_esptool.calls() == []  # no board was probed for an image that cannot come
+    assert not (home / "cache").exists()
+    assert took_s < 1.0, f"openbricks flash took {took_s:.2f} s to say there is no image"
 
 
 def test_without_firmware_the_newest_release_for_the_chip_is_downloaded_and_cached(

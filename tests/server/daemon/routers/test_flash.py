@@ -136,8 +136,10 @@ def test_the_clis_safety_gates_fail_the_job_before_anything_is_written(daemon, f
         assert fake_esptool.commands()[-2:] == ["erase-flash", "write-flash"]
 
 
-def test_bad_requests_start_nothing(daemon, boards, viewer_token):
+def test_bad_requests_start_nothing(daemon, boards, viewer_token, tmp_path, monkeypatch):
     board = boards[0].pty
+    monkeypatch.setenv("OPENBRICKS_CACHE_DIR", str(tmp_path / "cache"))  # no release cached ...
+    monkeypatch.delenv("OPENBRICKS_RELEASES_URL", raising=False)  # ... and none to fetch
     cases = [
         ({"targets": []}, 422, "invalid_request"),
         ({"targets": [{"port": board}]}, 422, "name_required"),
@@ -146,6 +148,7 @@ def test_bad_requests_start_nothing(daemon, boards, viewer_token):
         ({"targets": [{"port": board, "name": "A"}, {"port": "/dev/x", "name": "A"}]}, 422, "duplicate_name"),
         ({"targets": [{"port": board, "name": "A"}], "firmware": "0123456789abcdef"}, 404, "not_found"),
         ({"targets": [{"hub": "nope", "name": "A"}]}, 422, "bad_target"),
+        ({"targets": [{"port": board, "name": "A"}]}, 409, "no_firmware"),  # no image, no release
     ]
     with daemon.client() as client:
         for body, status, error in cases:
@@ -154,6 +157,11 @@ def test_bad_requests_start_nothing(daemon, boards, viewer_token):
         assert (
             "a Bluetooth advertisement carries at most 26" in client.post("/api/flash", json=cases[2][0]).text
         )
+        started_s = time.monotonic()
+        no_image = client.post("/api/flash", json=cases[-1][0]).json()
+        assert time.monotonic() - started_s < 1  # refused at once, not after a wait on the network
+        assert no_image["message"].startswith("no firmware image: upload one (POST /api/flash/firmware")
+        assert "firmware/build_firmware.sh" in no_image["message"]
         refused = client.post(
             "/api/flash/firmware",
             content=b"MZ not firmware",
