@@ -51,6 +51,8 @@ export class ConsoleModel {
   /** Runs seen on the stream, newest last (the History page reads the store; this feeds the live pages). */
   runs = $state<Record<string, RunInfo>>({});
   lastOutcome = $state<Record<string, RunOutcome>>({});
+  /** Whether the history holds any run at all (null until loaded): the dashboard's first-run hint. */
+  hasRuns = $state<boolean | null>(null);
   jobs = $state<Record<string, Job>>({});
   /** Names of the programs the daemon stores (null until loaded). */
   programNames = $state<Set<string> | null>(null);
@@ -191,6 +193,7 @@ export class ConsoleModel {
       const last: Record<string, RunOutcome> = {};
       for (const r of recent) if (r.outcome && !(r.hub_id in last)) last[r.hub_id] = r.outcome;
       this.lastOutcome = { ...last, ...this.lastOutcome };
+      this.hasRuns = recent.length > 0 || Object.keys(this.runs).length > 0;
     } catch (err) {
       this.fail(err, "Loading programs and recent runs");
     }
@@ -242,6 +245,7 @@ export class ConsoleModel {
           outcome: null,
         };
         this.runs[run] = info;
+        this.hasRuns = true;
         if (hubId) {
           const label = info.program_name ? `▶ ${info.program_name}` : "▶ run";
           this.output(hubId).startRun(run, `${label} started (${(d.origin as string) ?? "daemon"})`, info.started_ms);
