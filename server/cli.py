@@ -8,6 +8,7 @@ Every user-caused failure ends as one clear line on stderr and a non-zero status
 import argparse
 import importlib
 import math
+import os
 import sys
 
 from openbricks import __version__
@@ -29,6 +30,7 @@ COMMANDS = {
     "doc": "docs",
     "sim": "sim",
     "console": "console",
+    "completion": "completion",
 }
 
 
@@ -270,7 +272,12 @@ def _add_list(sub):
         action="store_true",
         help="Show every Bluetooth device, named or not (e.g. a hub that was flashed without a name).",
     )
+    _json(p, "one JSON array of {name, kind, address, status} objects")
     return p
+
+
+def _json(p, what: str) -> None:
+    p.add_argument("--json", action="store_true", help=f"Print {what} instead, for scripts.")
 
 
 def _add_log(sub):
@@ -286,6 +293,7 @@ def _add_log(sub):
     _hub_name(p)
     p.add_argument("--list", action="store_true", help="List the runs on the hub with their sizes instead.")
     p.add_argument("--run", type=run_index, help="Index of the run to show. Default: the most recent.")
+    _json(p, "with --list: one JSON array of {index, bytes} objects")
     _scan_timeout(p)
     return p
 
@@ -464,6 +472,21 @@ def _add_sim(sub):
     )
 
 
+def _add_completion(sub):
+    p = sub.add_parser(
+        "completion",
+        help="print the shell code that completes openbricks commands and options",
+        description=(
+            "Print the code that makes your shell complete openbricks' commands and options. Load it from "
+            "your shell's start-up file: bash: eval \"$(openbricks completion bash)\" in ~/.bashrc; zsh: "
+            "eval \"$(openbricks completion zsh)\" in ~/.zshrc; fish: openbricks completion fish | source "
+            "in ~/.config/fish/config.fish."
+        ),
+    )
+    p.add_argument("shell", choices=("bash", "zsh", "fish"), help="The shell to complete in.")
+    return p
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="openbricks",
@@ -487,6 +510,7 @@ def build_parser() -> argparse.ArgumentParser:
         _add_docs,
         _add_sim,
         _add_console,
+        _add_completion,
     ):
         command = add(sub)
         command.set_defaults(command_parser=command)  # lets _check report errors with the command's usage
@@ -511,6 +535,10 @@ def main(argv: list[str] | None = None) -> int:
         # Forwarded untouched (including --help): the simulator owns its own options.
         return _dispatch("sim", argv[1:])
     parser = build_parser()
+    if "_ARGCOMPLETE" in os.environ:  # the shell asks for completions (`openbricks completion`); exits
+        import argcomplete
+
+        argcomplete.autocomplete(parser)
     args = parser.parse_args(argv)
     if args.command is None:
         parser.print_help()

@@ -2,7 +2,7 @@
 
 Steps and progress go to stderr so a command's stdout carries only its data (a program's output, a
 log, a list), which scripts can pipe. The bar redraws in place on a terminal and prints a line per
-tenth otherwise, so CI logs and pipes stay readable.
+tenth otherwise, so CI logs and pipes stay readable. Colour follows rich's rules, NO_COLOR among them.
 """
 
 from __future__ import annotations
@@ -32,23 +32,30 @@ class Steps:
 
 
 class ProgressBar:
-    """A 0..100 % bar; `update(percent)` as often as you like, `finish()` once."""
+    """A 0..100 % bar; `update(percent)` as often as you like, `finish()` once.
 
-    WIDTH = 30
+    On a terminal it is rich's bar (which leaves colour out under NO_COLOR or a dumb terminal);
+    elsewhere a line per tenth, which a log or a pipe keeps readable."""
 
     def __init__(self, label: str, stream: TextIO | None = None):
         self.label = label
         self.stream = stream or sys.stderr
         self.interactive = self.stream.isatty()
         self._shown = -1.0
+        self._bar = None
+        if self.interactive:
+            from rich.console import Console
+            from rich.progress import BarColumn, Progress, TaskProgressColumn, TextColumn
+
+            columns = (TextColumn(f"    {label}"), BarColumn(), TaskProgressColumn())
+            self._bar = Progress(*columns, console=Console(file=self.stream))
+            self._task = self._bar.add_task(label, total=100.0)
+            self._bar.start()
 
     def update(self, percent: float) -> None:
         percent = max(0.0, min(100.0, percent))
-        if self.interactive:
-            filled = int(self.WIDTH * percent / 100)
-            bar = "#" * filled + "." * (self.WIDTH - filled)
-            self.stream.write(f"\r    {self.label} [{bar}] {percent:5.1f} %")
-            self.stream.flush()
+        if self._bar is not None:
+            self._bar.update(self._task, completed=percent)
             self._shown = percent
         elif int(percent // 10) > int(self._shown // 10) or (percent == 100 and self._shown < 100):
             self.stream.write(f"    {self.label} {int(percent // 10) * 10:3d} %\n")
@@ -58,9 +65,8 @@ class ProgressBar:
     def finish(self) -> None:
         if self._shown < 100:
             self.update(100.0)
-        if self.interactive:
-            self.stream.write("\n")
-            self.stream.flush()
+        if self._bar is not None:
+            self._bar.stop()
 
 
 def confirm(question: str, assume_yes: bool, hint: str) -> None:

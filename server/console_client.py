@@ -119,20 +119,17 @@ def list_hubs(info, args) -> int:
         console.close()
     if listed["ble"].startswith("unavailable"):
         print(f"Bluetooth scan {listed['ble']}", file=sys.stderr)
+    from openbricks_server.hub_table import HubRow, print_hubs
+
     rows = []
     for hub in listed["hubs"]:
         if hub["kind"] == "ble":
             signal = f"{hub['rssi']} dBm" if hub["rssi"] is not None else hub["status"]
-            rows.append((hub["name"], "hub", hub["address"], f"{signal}, {hub['status']}"))
+            rows.append(HubRow(hub["name"], "hub", hub["address"], f"{signal}, {hub['status']}"))
         else:
             state = "running a program" if hub["status"] == "running" else hub["status"]
-            rows.append((hub["name"], hub["kind"], hub["hub_id"], state))
-    if not rows:
-        print(f"no hubs found (the console at {info.url} knows none)", file=sys.stderr)
-        return EXIT_OK
-    widths = [max(len(row[i]) for row in rows) for i in range(3)]
-    for row in rows:
-        print(f"{row[0]:<{widths[0]}}  {row[1]:<{widths[1]}}  {row[2]:<{widths[2]}}  {row[3]}")
+            rows.append(HubRow(hub["name"], hub["kind"], hub["hub_id"], state))
+    print_hubs(rows, args.json, f"no hubs found (the console at {info.url} knows none)")
     return EXIT_OK
 
 
@@ -166,17 +163,14 @@ def upload(info, args, program) -> int:
 
 
 def log(info, args) -> int:
-    from openbricks_server.logview import LogRenderer
+    from openbricks_server.logview import LogRenderer, print_runs
 
     console = Console(info)
     try:
         _ready_hub(console, args.name)
         runs = console.call("GET", hub_path(args.name) + "/logs")
         if args.list:
-            if not runs:
-                print(f"{args.name} has no run logs yet")
-            for entry in runs:
-                print(f"run {entry['index']:>4}  {entry['bytes']:>7} bytes")
+            print_runs(args.name, runs, args.json)
             return EXIT_OK
         indices = [entry["index"] for entry in runs]
         if not indices:

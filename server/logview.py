@@ -7,6 +7,7 @@ mid-line, so a partial line waits for its end (or for `finish()`).
 
 from __future__ import annotations
 
+import json
 import re
 from collections.abc import Callable
 from datetime import datetime
@@ -76,6 +77,17 @@ LAUNCHER_LINES = (
     "a motor halt",
     "native scheduler reset failed",
 )
+
+
+def print_runs(name: str, runs: list[dict], as_json: bool) -> None:
+    """`log --list`: one line per kept run, or with --json one array of {"index", "bytes"} objects."""
+    if as_json:
+        print(json.dumps([{"index": entry["index"], "bytes": entry["bytes"]} for entry in runs]))
+        return
+    if not runs:
+        print(f"{name} has no run logs yet")
+    for entry in runs:
+        print(f"run {entry['index']:>4}  {entry['bytes']:>7} bytes")
 
 
 def program_lines(log_text: str) -> list[str]:

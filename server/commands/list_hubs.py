@@ -34,11 +34,12 @@ def main(args) -> int:
     console = console_client.running()
     if console is not None:  # the console lists its hubs (virtual ones included) and what it scans
         return console_client.list_hubs(console, args)
+    from openbricks_server.hub_table import HubRow, print_hubs
     from openbricks_server.link.discovery import virtual_hubs
 
     rows = []
     for hub in virtual_hubs():
-        rows.append((hub.name, "virtual", hub.pty, "running a program" if hub.running else "idle"))
+        rows.append(HubRow(hub.name, "virtual", hub.pty, "running a program" if hub.running else "idle"))
     try:
         devices = asyncio.run(_ble_devices(args.timeout))
     except Exception as exc:  # noqa: BLE001 - no adapter / no D-Bus / radio off: all mean "no scan"
@@ -52,13 +53,7 @@ def main(args) -> int:
         devices = []
     for name, address, rssi, is_hub in devices:
         if name or args.all:
-            rows.append((name or NO_NAME, "hub" if is_hub else "ble", address, f"{rssi} dBm"))
-    if not rows:
-        print(
-            f"no hubs found (Bluetooth scan of {args.timeout:g} s; no virtual hubs running)", file=sys.stderr
-        )
-        return EXIT_OK
-    widths = [max(len(row[i]) for row in rows) for i in range(3)]
-    for row in rows:
-        print(f"{row[0]:<{widths[0]}}  {row[1]:<{widths[1]}}  {row[2]:<{widths[2]}}  {row[3]}")
+            rows.append(HubRow(name or NO_NAME, "hub" if is_hub else "ble", address, f"{rssi} dBm"))
+    none_found = f"no hubs found (Bluetooth scan of {args.timeout:g} s; no virtual hubs running)"
+    print_hubs(rows, args.json, none_found)
     return EXIT_OK

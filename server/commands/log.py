@@ -7,17 +7,14 @@ import sys
 
 from openbricks_server.errors import EXIT_OK, CliError
 from openbricks_server.hub_session import with_hub
-from openbricks_server.logview import LogRenderer, missing_run
+from openbricks_server.logview import LogRenderer, missing_run, print_runs
 
 
 async def _talk(session, args):
     listing = await session.call("runs")
     runs = listing["runs"]
     if args.list:
-        if not runs:
-            print(f"{session.name} has no run logs yet")
-        for entry in runs:
-            print(f"run {entry['index']:>4}  {entry['bytes']:>7} bytes")
+        print_runs(session.name, runs, args.json)
         return
     indices = [entry["index"] for entry in runs]
     if not indices:

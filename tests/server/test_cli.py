@@ -26,6 +26,7 @@ def test_every_command_of_chapter_3_is_there():
         "doc",
         "sim",
         "console",
+        "completion",
     }
 
 
@@ -111,3 +112,35 @@ def test_sim_forwards_everything_including_help():
         timeout=60,
     )
     assert done.returncode == 0 and "usage: openbricks sim run" in done.stdout and "--no-shim" in done.stdout
+
+
+@pytest.mark.parametrize("shell", ["bash", "zsh", "fish"])
+def test_completion_prints_code_that_loads_in_the_shell(shell, capsys):
+    assert main(["completion", shell]) == 0
+    code = capsys.readouterr().out
+    assert "openbricks" in code and "_ARGCOMPLETE" in code
+
+
+def test_tab_completes_commands_and_options_from_the_real_parser(tmp_path):
+    """What the shell code asks for when Tab is pressed: the commands, then a command's options."""
+    import os
+
+    answer = tmp_path / "completions"
+
+    def complete(line):
+        env = {
+            **os.environ,
+            "_ARGCOMPLETE": "1",
+            "_ARGCOMPLETE_IFS": "\n",
+            "_ARGCOMPLETE_STDOUT_FILENAME": str(answer),
+            "COMP_LINE": line,
+            "COMP_POINT": str(len(line)),
+        }
+        command = [sys.executable, "-m", "openbricks_server.cli"]
+        done = subprocess.run(command, env=env, capture_output=True, text=True, timeout=60)
+        return done.returncode, [word.strip() for word in answer.read_text().split("\n")]
+
+    status, words = complete("openbricks l")
+    assert status == 0 and {"list", "log"} <= set(words)
+    _, options = complete("openbricks log --l")
+    assert "--list" in options

@@ -1,11 +1,12 @@
 """Run-log stamps become local times; lines split across chunks come out whole."""
 
+import json
 import os
 import time
 
 import pytest
 
-from openbricks_server.logview import LogRenderer, local_time, render_line
+from openbricks_server.logview import LogRenderer, local_time, print_runs, render_line
 
 
 @pytest.fixture
@@ -35,3 +36,12 @@ def test_a_line_split_across_chunks_is_rendered_once_whole(tokyo):
     renderer.finish()
     assert out[-1] == "[2026-07-13 22:42:05.000] no newline at the end\n"
     assert os.environ["TZ"] == "Asia/Tokyo"
+
+
+def test_a_run_listing_as_json_has_stable_keys(capsys):
+    print_runs("RobotA", [{"index": 3, "bytes": 120, "extra": 1}], as_json=True)
+    assert json.loads(capsys.readouterr().out) == [{"index": 3, "bytes": 120}]
+    print_runs("RobotA", [], as_json=True)
+    assert json.loads(capsys.readouterr().out) == []
+    print_runs("RobotA", [], as_json=False)
+    assert capsys.readouterr().out == "RobotA has no run logs yet\n"

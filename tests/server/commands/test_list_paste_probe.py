@@ -1,5 +1,6 @@
 """list shows the virtual hubs (marked); paste-probe measures the raw-paste path of one."""
 
+import json
 import re
 
 import pytest
@@ -13,6 +14,13 @@ def test_list_marks_virtual_hubs_and_survives_a_missing_bluetooth_adapter(env, h
     done = cli(env, "list", "--timeout", "0.5")
     assert done.returncode == 0, done.stderr
     assert re.search(rf"^RobotA\s+virtual\s+{re.escape(hub.pty)}\s+idle$", done.stdout, re.MULTILINE)
+
+
+def test_list_json_gives_scripts_the_same_hubs_with_stable_keys(env, hub):
+    done = cli(env, "list", "--timeout", "0.5", "--json")
+    assert done.returncode == 0, done.stderr
+    hubs = json.loads(done.stdout)
+    assert {"name": "RobotA", "kind": "virtual", "address": hub.pty, "status": "idle"} in hubs
 
 
 def test_paste_probe_reports_each_size_and_the_window(env, hub):

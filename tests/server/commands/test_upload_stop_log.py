@@ -1,5 +1,6 @@
 """upload then the button, stop, and the run logs, end to end against a virtual hub."""
 
+import json
 import re
 import subprocess
 import sys
@@ -86,6 +87,8 @@ def test_log_list_and_a_chosen_run_with_local_time_stamps(env):
     rows = re.findall(r"^run\s+(\d+)\s+(\d+) bytes$", listing.stdout, re.MULTILINE)
     assert rows and all(int(size) > 0 for _, size in rows)
     newest = int(rows[-1][0])
+    as_json = json.loads(cli(env, "log", "-n", "RobotA", "--list", "--json").stdout)
+    assert as_json[-len(rows):] == [{"index": int(i), "bytes": int(size)} for i, size in rows]
     chosen = cli(env, "log", "-n", "RobotA", "--run", str(newest))
     assert chosen.stdout == cli(env, "log", "-n", "RobotA").stdout
     first_line = chosen.stdout.splitlines()[0]
