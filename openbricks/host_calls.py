@@ -14,7 +14,8 @@ A host that stays connected (the console daemon) passes `watch=<nonce>` to `run`
 program run is then announced on the console as `@openbricks:<nonce> run-begin {"run", "slot",
 "started_ms"}` (the run log's index, slot and header stamp: the key that matches live output to the
 log read back later) and, for button runs, `@openbricks:<nonce> run-end {"run", "outcome"}`; the
-program's `openbricks.tools.plot()` samples carry the same nonce. Text a program prints can't pass
+program's `openbricks.tools.plot()` samples carry the same nonce, and so do the line stamps
+(`@openbricks:<nonce> t <ms>`, openbricks.log). Text a program prints can't pass
 for these: it does not know the nonce.
 
 Calls: info, set_rtc, stage, stage_begin / stage_append / stage_end, read_file, run, runs, read_run,
@@ -406,12 +407,14 @@ class _Watch:
         if self.nonce is not None:
             launcher.add_listener(self._on_running)
             tools._plot_tag[0] = self.nonce
+            log.stamp_console(self.nonce)
         return self
 
     def __exit__(self, *exc_info):
         if self.nonce is not None:
             launcher.remove_listener(self._on_running)
             tools._plot_tag[0] = None
+            log.stamp_console(None)
         return False
 
 

@@ -519,9 +519,7 @@ class Launcher:
                 _set_running(False)
                 self._wind_down()  # before the traceback: printing it over BLE takes a while
                 text = traceback_text(exc) + _advice(exc, free)
-                log.console_print(text, end="")
-                log.count_printed(text)
-                log.write_text(text)
+                log.print_framing(text)
                 log.write_text("stopped: %s after %d ms" % (_exception_line(exc), self._elapsed_ms()))
             finally:
                 _last_end[0] = (run_log.index, outcome, trigger, stopped_by)

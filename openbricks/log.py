@@ -17,11 +17,19 @@ milliseconds on the ESP32, so it is paid only at the durable points: the framing
 Each run is capped at `max_bytes` of print output so a runaway print loop can't fill the flash; the
 framing lines still fit in a small reserve after the cap, because the end of a runaway run is exactly
 what its owner wants to read.
+
+A host that stays connected (the console daemon, `watch=<nonce>`) gets each line's stamp live too, so a
+line shows the same hub time as it arrives and when read back from the log: before the first line a
+print starts, `@openbricks:<nonce> t <ms since the run's header stamp>` (only when the stamp changed;
+a line without a frame of its own has the last one's). Relative to the header, which the run-begin
+frame carries, the frame stays short on a slow radio link.
 """
 
 import binascii
 import os
 import time
+
+from openbricks.host_protocol import FRAME_PREFIX
 
 LOG_DIR = "/openbricks_logs"
 MAX_RUNS = 10
@@ -156,11 +164,11 @@ class _LogSession:
         if self._pending_bytes >= _BUFFER_LIMIT:
             self.pump()
 
-    def write(self, text):
+    def write(self, text, stamp_ms=None):
         """Program output (from print): buffered, dropped from the file once the run passes the cap."""
         if not text or self._file is None:
             return
-        data = self._stamp(text)
+        data = self._stamp(text, stamp_ms)
         used = self._file_bytes + self._pending_bytes
         if self._capped or used + len(data) > self.max_bytes:
             self.dropped_bytes += len(data)
@@ -307,12 +315,38 @@ def worst_write_ms():
 
 
 _printed = [0, 0]  # bytes and crc32 of what the running program printed, as the console sends it
+_stamp_tag = [None]  # the watching host's nonce: line stamps go to the console too (see the top)
+_console = [False, None]  # the console's line is open (no newline yet); the last stamp frame's ms
 
 
 def reset_printed():
     """Start counting a new run's console output (the launcher, as a run starts)."""
     _printed[0] = 0
     _printed[1] = 0
+    _console[0] = False
+    _console[1] = None
+
+
+def stamp_console(nonce):
+    """Send line stamps to the console as frames tagged `nonce` while a run is on (None: stop)."""
+    _stamp_tag[0] = nonce
+
+
+def _console_text(text, stamp_ms, started_ms):
+    """`text` as the console gets it: a stamp frame before the first line it starts, if that line's
+    stamp differs from the last one sent. A frame never lands inside a line the console has open."""
+    if _console[0]:
+        newline = text.find("\n")
+        at = -1 if newline < 0 else newline + 1
+    else:
+        at = 0
+    if text:
+        _console[0] = text[-1] != "\n"
+    delta = stamp_ms - started_ms
+    if at < 0 or at >= len(text) or delta == _console[1]:
+        return text
+    _console[1] = delta
+    return text[:at] + FRAME_PREFIX + _stamp_tag[0] + " t " + str(delta) + "\n" + text[at:]
 
 
 def printed():
@@ -333,14 +367,34 @@ def tee_print(*args, **kwargs):
     The launcher installs it for the program's duration; teeing at print is what MicroPython allows
     on every port (sys.stdout is not rebindable everywhere).
     """
-    console_print(*args, **kwargs)
     sep = kwargs.get("sep")
     end = kwargs.get("end")
     text = (" " if sep is None else sep).join([str(a) for a in args]) + ("\n" if end is None else end)
-    count_printed(text)
     current = _active[0]
+    if current is None or _stamp_tag[0] is None or kwargs.get("file") is not None:
+        console_print(*args, **kwargs)
+        count_printed(text)
+        if current is not None:
+            current.write(text)
+        return
+    stamp = epoch_ms()
+    shown = _console_text(text, stamp, current.started_ms)
+    console_print(shown, end="")
+    count_printed(shown)
+    current.write(text, stamp)
+
+
+def print_framing(text):
+    """Text for the console that the log keeps as a framing line (a traceback): one stamp for both."""
+    current = _active[0]
+    stamp = epoch_ms()
+    shown = text
+    if current is not None and _stamp_tag[0] is not None:
+        shown = _console_text(text, stamp, current.started_ms)
+    console_print(shown, end="")
+    count_printed(shown)
     if current is not None:
-        current.write(text)
+        current.write_text(text, stamp_ms=stamp)
 
 
 console_print = print  # the interpreter's own print, kept before anyone tees it

@@ -136,3 +136,48 @@ def test_identify_without_a_status_led_says_so():
     result = host_calls.identify(1000)
     assert not result["ok"] and "no status LED" in result["error"]
     assert not host_calls.identify(0)["ok"]
+
+
+def test_a_watched_run_sends_each_lines_log_stamp_before_it_and_never_inside_a_line():
+    with tmpdir.scratch() as directory:
+        source = (
+            "import time\n"
+            "print('half', end='')\n"
+            "time.sleep(0.003)\n"
+            "print(' whole')\n"
+            "for i in range(3):\n"
+            "    print('line', i)\n"
+            "    time.sleep(0.003)\n"
+            "print('two\\nlines')\n"
+        )
+        path = _stage(directory, source)
+        launcher.get(program_path=path, log_dir=directory + "/logs")
+        shown = []
+        console = _Console()
+        saved = log.console_print
+        log.console_print = lambda *args, end="\n", **kw: shown.append(" ".join([str(a) for a in args]) + end)
+        try:
+            result = host_calls.run(watch=NONCE)
+        finally:
+            log.console_print = saved
+            console.close()
+        assert result["ok"] and result["outcome"] == "finished", result
+        (begin,) = console.frames("run-begin")
+        # The console as the host reads it: a stamp frame sets the stamp of the lines after it.
+        frame = "@openbricks:" + NONCE + " t "
+        live, stamp = [], None
+        for line in "".join(shown).split("\n")[:-1]:
+            assert frame not in line or line.startswith(frame), line  # never inside a line
+            if line.startswith(frame):
+                stamp = begin["started_ms"] + int(line[len(frame) :])
+            else:
+                live.append((stamp, line))
+        kept = []
+        framing = ("-- run_", "started: ", "watched: ", "stopped: ")
+        for line in log.read_run(0, directory + "/logs").split("\n")[:-1]:
+            ms, _, text = line.partition(" ")
+            if not any(text.startswith(f) for f in framing):
+                kept.append((int(ms), text))
+        assert [text for _, text in live] == ["half whole", "line 0", "line 1", "line 2", "two", "lines"]
+        assert live == kept
+        assert log._stamp_tag[0] is None  # stamps go to the console only while watched

@@ -120,7 +120,7 @@ class _LiveRun:
         self.index: int | None = None
         self.started_ms: int | None = None
         self.counter = LineCounter()
-        self.pending: list[str] = []  # output before the announcement (none expected)
+        self.pending: list[tuple[str, int | None]] = []  # output before the announcement (none expected)
         self.gap_since: int | None = None
         self.gap_reason = ""
         self.started = asyncio.get_running_loop().create_future()
@@ -147,11 +147,11 @@ class _LiveRun:
         if not self.started.done():
             self.started.set_result(self.run_id)
 
-    def lines(self, texts: list[str]) -> None:
+    def lines(self, stamped: list[tuple[str, int | None]]) -> None:
         if self.run_id is None:
-            self.pending.extend(texts)
+            self.pending.extend(stamped)
             return
-        self.actor.events.run_output(self.run_id, self.counter.number(texts))
+        self.actor.events.run_output(self.run_id, self.counter.number(stamped))
 
     def samples(self, samples) -> None:
         if self.run_id is not None:
@@ -608,9 +608,9 @@ class HubActor:
             if self._pull_wanted and self._button_run is None:
                 return  # a button run ended: read its log back (the serve loop does it now)
 
-    def _watch_lines(self, texts: list[str]) -> None:
+    def _watch_lines(self, stamped: list[tuple[str, int | None]]) -> None:
         if self._button_run is not None:
-            self._button_run.lines(texts)
+            self._button_run.lines(stamped)
 
     def _watch_samples(self, samples) -> None:
         if self._button_run is not None:

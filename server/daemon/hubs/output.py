@@ -4,7 +4,10 @@ Live output arrives as bytes in arbitrary pieces; `OutputParser` cuts it into li
 handed on as soon as its newline arrives, CRLF or LF), and takes out the frames tagged with the
 nonce the daemon gave the hub (`@openbricks:<nonce> <kind> <json>`: run-begin, run-end, plot).
 Anything else is output, including text that merely looks like a frame: a program cannot forge a
-sample or a run boundary, and nothing it prints is lost.
+sample or a run boundary, and nothing it prints is lost. A hub that stamps its run log also sends the
+stamps (`t <ms since the run-begin stamp>` frames, openbricks.log), so a live line carries the same
+`hub_ms` as the line read back from the log; a hub without them leaves `hub_ms` empty until its log is
+read back.
 
 Run logs read back from the hub (`parse_run_log`) are stamped lines: `<epoch ms> <text>`, a header
 `-- run_N --`, the launcher's framing lines (started:/stopped:/...), the program's output, and the
@@ -52,7 +55,7 @@ def plot_sample(payload: str, hub_ms: int | None, recv_ms: int) -> TelemetrySamp
 
 
 class OutputParser:
-    """Live output of one hub: `on_lines(texts)`, `on_samples(samples)`, `on_frame(kind, data)`.
+    """Live output of one hub: `on_lines([(text, hub_ms)])`, `on_samples(samples)`, `on_frame(kind, data)`.
 
     Each `feed()` reports what it completed in one call per kind, so a burst of lines becomes one
     batch for the store and the event stream.
@@ -61,7 +64,7 @@ class OutputParser:
     def __init__(
         self,
         nonce: str,
-        on_lines: Callable[[list[str]], None],
+        on_lines: Callable[[list[tuple[str, int | None]]], None],
         on_samples: Callable[[list[TelemetrySample]], None],
         on_frame: Callable[[str, dict], None],
     ):
@@ -70,6 +73,8 @@ class OutputParser:
         self.on_samples = on_samples
         self.on_frame = on_frame
         self._partial = bytearray()
+        self._started_ms: int | None = None  # the run-begin frame's stamp: stamp frames count from it
+        self._stamp: int | None = None  # the hub's stamp of the lines from here on
 
     def feed(self, data: bytes) -> None:
         self._partial += data
@@ -88,16 +93,19 @@ class OutputParser:
                 self._handle([text])
 
     def _handle(self, texts: list[str]) -> None:
-        lines: list[str] = []
+        lines: list[tuple[str, int | None]] = []
         samples: list[TelemetrySample] = []
         recv = now_ms()
         for text in texts:
             if not text.startswith(self.frame_start):
-                lines.append(text)
+                lines.append((text, self._stamp))
                 continue
             kind, _, payload = text[len(self.frame_start) :].partition(" ")
+            if kind == "t" and payload.isdigit() and self._started_ms is not None:
+                self._stamp = self._started_ms + int(payload)
+                continue
             if kind == "plot":
-                sample = plot_sample(payload, None, recv)
+                sample = plot_sample(payload, self._stamp, recv)
                 if sample is not None:
                     samples.append(sample)
                     continue
@@ -110,12 +118,15 @@ class OutputParser:
                     # Frames end a batch: what came before them belongs before the boundary.
                     self._emit(lines, samples)
                     lines, samples = [], []
+                    started = data.get("started_ms") if kind == "run-begin" else None
+                    self._started_ms = started if isinstance(started, int) else None
+                    self._stamp = None
                     self.on_frame(kind, data)
                     continue
-            lines.append(text)
+            lines.append((text, self._stamp))
         self._emit(lines, samples)
 
-    def _emit(self, lines: list[str], samples: list[TelemetrySample]) -> None:
+    def _emit(self, lines: list[tuple[str, int | None]], samples: list[TelemetrySample]) -> None:
         if lines:
             self.on_lines(lines)
         if samples:
@@ -123,18 +134,19 @@ class OutputParser:
 
 
 class LineCounter:
-    """Numbers one run's output lines from 1, stamping the daemon's receive time."""
+    """Numbers one run's output lines from 1, stamping the daemon's receive time (and keeping the
+    hub's stamp, when the hub sent one)."""
 
     def __init__(self):
         self.count = 0
         self.last_text: str | None = None
 
-    def number(self, texts: list[str]) -> list[OutputLine]:
+    def number(self, stamped: list[tuple[str, int | None]]) -> list[OutputLine]:
         recv = now_ms()
         lines = []
-        for text in texts:
+        for text, hub_ms in stamped:
             self.count += 1
-            lines.append(OutputLine(self.count, text, None, recv))
+            lines.append(OutputLine(self.count, text, hub_ms, recv))
             if text.strip():
                 self.last_text = text
         return lines

@@ -167,3 +167,58 @@ def test_a_stored_program_runs_by_name_and_a_button_run_reaches_the_history(daem
         assert [line["text"] for line in read["lines"]] == ["stored one"] and "-- run_1 --" in read["text"]
         gone = api.get("/api/hubs/SimHub-1/logs/7")
         assert gone.status_code == 404 and gone.json()["error"] == "log_not_found"
+
+
+STAMPED = (
+    "from openbricks.tools import wait, plot\n"
+    "print('no newline yet', end='')\n"
+    "wait(30)\n"
+    "print(' ...now')\n"
+    "for i in range(4):\n"
+    "    print('line', i)\n"
+    "    plot('lap', i)\n"
+    "    wait(25)\n"
+    "print('two\\nlines')\n"
+    "raise ValueError('the end')\n"
+)
+
+
+def test_live_output_carries_the_hubs_stamp_and_history_shows_the_same(tmp_path, monkeypatch):
+    monkeypatch.setenv("OPENBRICKS_DATA_DIR", str(tmp_path / "data"))
+    daemon = start_daemon(tmp_path / "data", virtual=1)
+    try:
+        with daemon.client() as api, daemon.websocket() as ws:
+            wait_idle(api, ["SimHub-1"])
+            run_id = api.post("/api/hubs/SimHub-1/run", json={"source": STAMPED}).json()["run_id"]
+            live: dict[int, tuple[str, int | None]] = {}
+            samples = []
+            deadline = time.monotonic() + 30
+            while time.monotonic() < deadline:
+                event = json.loads(ws.recv(timeout=10))
+                if event["run"] != run_id:
+                    continue
+                if event["type"] == "output" and not event["data"].get("from_run_log"):
+                    live.update({ln["line_no"]: (ln["text"], ln["hub_ms"]) for ln in event["data"]["lines"]})
+                if event["type"] == "telemetry":
+                    samples += [s["hub_ms"] for s in event["data"]["samples"]]
+                if event["type"] == "run_ended":
+                    break
+            run = wait_ended(api, run_id)
+            assert run["outcome"] == "error"
+            wait_idle(api, ["SimHub-1"])
+            (entry,) = api.get("/api/hubs/SimHub-1/logs").json()
+            log = api.get(f"/api/hubs/SimHub-1/logs/{entry['index']}").json()
+            assert log["started_ms"] == run["started_ms"]
+            from_log = [(ln["text"], ln["hub_ms"]) for ln in log["lines"]]
+            # every line has the hub's own stamp live, the one its run log has (the traceback's too)
+            assert from_log[-1] == ("ValueError: the end", from_log[-1][1])
+            assert [live[n] for n in sorted(live)] == from_log
+            assert from_log[0] == ("no newline yet ...now", from_log[0][1]) and from_log[0][1] is not None
+            assert all(hub_ms is not None and hub_ms >= run["started_ms"] for hub_ms in samples)
+            assert len(samples) == 4
+            history = api.get(f"/api/runs/{run_id}/output").json()["lines"]
+            assert [(ln["text"], ln["hub_ms"]) for ln in history] == [live[n] for n in sorted(live)]
+            stored = [s["hub_ms"] for s in api.get(f"/api/runs/{run_id}/telemetry").json()]
+            assert stored == samples
+    finally:
+        daemon.stop()
