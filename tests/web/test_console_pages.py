@@ -235,8 +235,7 @@ def test_a_viewer_sees_everything_and_can_change_nothing(console, page_for):
     page.locator(".notice", has_text="Viewer role").first.wait_for()
 
     page.goto(page.url.split("#")[0] + "#/editor")
-    page.locator("button.prog").first.wait_for()
-    page.locator("button.prog").first.click()
+    page.locator("button.prog", has_text="shown.py").click()
     for label in ("Save", "Upload", "Run ▶", "Stop"):
         assert page.get_by_role("button", name=label, exact=True).is_disabled(), label
     assert page.is_disabled("input[aria-label='New program name']")

@@ -19,7 +19,12 @@ def token_hash(token: str) -> str:
 
 
 def new_token() -> str:
-    return secrets.token_urlsafe(32)
+    """A random token that never starts with "-": a script's `--token TOKEN` would read one that did
+    as an option (argparse refuses it), so about one token in 64 could not be passed as people pass it."""
+    while True:
+        token = secrets.token_urlsafe(32)
+        if not token.startswith("-"):
+            return token
 
 
 class LabelTaken(Exception):
