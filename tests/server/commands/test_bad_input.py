@@ -305,9 +305,10 @@ CASES = [
         answer_within_s=5.0,
     ),
     case("flash-missing-port", "flash --name A --port /dev/no-such-board", FAILED, "there is no such port"),
-    # -- docs ------------------------------------------------------------------------------------
-    case("completion-unknown-shell", "completion tcsh", USAGE, "invalid choice: 'tcsh'", "bash", "zsh", "fish"),
+    # -- completion --------------------------------------------------------------------------------
+    case("completion-unknown-shell", "completion tcsh", USAGE, "invalid choice: 'tcsh'", "bash", "fish"),
     case("completion-without-shell", "completion", USAGE, "required: shell"),
+    # -- docs ------------------------------------------------------------------------------------
     case("docs-unknown-page", "docs nosuch", USAGE, "no docs page 'nosuch'", "pages: "),
     case("docs-typo", "docs simulater", USAGE, "did you mean simulator?"),
     case("docs-path-traversal", "docs ../../etc/passwd", USAGE, "no docs page '../../etc/passwd'"),
