@@ -37,7 +37,7 @@ def _check_target(target, trees, build, boards, only, mpy_cross):
     board_dir = boards / f"openbricks_{target}"
     port = trees.micropython / "ports" / "esp32"
     config = sdkconfig.generate(trees, target, sdkconfig.board_fragments(board_dir, port), out / "config")
-    includes, _ = include_path.component_includes(trees, target, config, out / "config")
+    includes = include_path.component_includes(trees, target, config, out / "config")
     compiler, cpp_flags, c_flags = flags.command_line(trees, target, config, includes, out, board_dir)
     genhdr.generate(trees.micropython, compiler, cpp_flags, genhdr.binding_sources(flags.MODULE_DIR), out)
     objects = out / "obj"

@@ -66,7 +66,7 @@ def component_includes(trees, target, config, out, arch="xtensa"):
     seen = {}
     pending = list(dict.fromkeys(wanted))
     while pending:
-        batch = [name for name in pending if name not in seen]
+        batch = list(dict.fromkeys(name for name in pending if name not in seen))
         pending = []
         missing = [name for name in batch if not (idf / "components" / name).is_dir()]
         if missing:
@@ -81,4 +81,4 @@ def component_includes(trees, target, config, out, arch="xtensa"):
     folders = []
     for name in sorted(seen):
         folders += [d for d in seen[name] if d.is_dir() and d not in folders]
-    return folders, sorted(seen)
+    return folders

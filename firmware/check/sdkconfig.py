@@ -29,7 +29,6 @@ UNSET = re.compile(r"^\s*#\s*(CONFIG_[A-Za-z0-9_]+) is not set")
 @dataclass(frozen=True)
 class Fragment:
     path: Path
-    named_in: str  # where the board names it: "file:line"
     ours: bool  # the board's, not one of the port's own (MicroPython's are not ours to fix)
 
 
@@ -63,7 +62,7 @@ def board_fragments(board_dir, port_dir):
                 f"{where}: sdkconfig fragment {entry} does not exist ({path}); MicroPython 1.28's esp32 "
                 "port has no such file: drop it from SDKCONFIG_DEFAULTS or add the file"
             )
-        fragments.append(Fragment(path, where, not path.is_relative_to(Path(port_dir).resolve())))
+        fragments.append(Fragment(path, not path.is_relative_to(Path(port_dir).resolve())))
     return fragments
 
 
