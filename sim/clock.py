@@ -50,6 +50,9 @@ class SimClock(VirtualClock):
         self._stepping = False  # inside physics.step(): the controllers' tick is running
         self.limit_ms = limit_ms
         self._stop = threading.Event()
+        # The Python-time charge (python_cost.py) while a program runs: the clock's own work is the
+        # hub's, so counting stops while time advances and starts again for each timer callback.
+        self.python_cost = None
 
     def charge_cpu_us(self, us: int) -> None:
         """Let a little time pass for work done on the CPU (a ticks_*() call, a bus transfer).
@@ -70,7 +73,31 @@ class SimClock(VirtualClock):
         if self._stop.is_set():
             self._stop.clear()
             raise SimStopped("the run was stopped")
-        super().advance_us(us)
+        cost = self.python_cost
+        if cost is None or not cost.counting:
+            super().advance_us(us)
+            return
+        cost.pause()
+        try:
+            super().advance_us(us)
+        finally:
+            cost.resume()
+
+    def schedule(self, callback, delay_us, period_us=0):
+        """VirtualClock.schedule(); the callback is the program's or the runtime's code, so it counts."""
+
+        def counted():
+            cost = self.python_cost
+            if cost is None or cost.counting:
+                callback()
+                return
+            cost.resume()
+            try:
+                callback()
+            finally:
+                cost.pause()
+
+        return super().schedule(counted, delay_us, period_us)
 
     def _run_to(self, t_us: int) -> None:
         """The physics follows the clock: it steps up to t_us before time may read it."""

@@ -12,7 +12,9 @@ Units are the manual's: millimetres, degrees, heading clockwise-positive from
 """
 
 import ctypes
+import glob
 import math
+import os
 from dataclasses import dataclass
 
 import mujoco
@@ -59,6 +61,7 @@ class Physics:
         wheel_diameter_mm=None,
         axle_track_mm=None,
     ):
+        _mujoco_library()
         self.world: World = resolve(world) if isinstance(world, str) else world
         spec = chassis if isinstance(chassis, ChassisSpec) else _chassis(chassis)
         self.chassis: ChassisSpec = spec.with_geometry(wheel_diameter_mm, axle_track_mm)
@@ -129,7 +132,7 @@ class Physics:
                 "another simulated robot in this process already runs the physics control callback; "
                 "close() it first (MuJoCo's control callback is process-wide)"
             )
-        controller = openbricks_mjcontrol.Controller(self.model, self.data, world_process)
+        controller = openbricks_mjcontrol.Controller(self.model, self.data, _mj_step_address(), world_process)
         motor = self.chassis.motor
         for joint in self.wheel_joints:
             controller.add_wheel(
@@ -184,6 +187,36 @@ def _chassis(name: str) -> ChassisSpec:
     except KeyError:
         known = ", ".join(sorted(CHASSIS))
         raise ValueError(f"unknown chassis {name!r}: use one of {known}") from None
+
+
+def _mujoco_library() -> ctypes.CDLL:
+    """MuJoCo's C library, the one the mujoco package loaded (one MuJoCo in the process).
+
+    The first call also clears MuJoCo's timer callback, which the mujoco package sets to a clock read:
+    MuJoCo then reads the clock a few dozen times per step for its profiling timers (mjData.timer),
+    about a tenth of a step's cost, and the simulator never reads them."""
+    if not _library:
+        folder = os.path.dirname(mujoco.__file__)
+        names = ("libmujoco.so*", "libmujoco*.dylib", "mujoco.dll")
+        found = [
+            path
+            for name in names
+            for path in sorted(glob.glob(os.path.join(folder, "**", name), recursive=True))
+        ]
+        if not found:
+            raise ImportError(f"MuJoCo's library is not inside its package at {folder}: reinstall mujoco")
+        library = ctypes.CDLL(found[0])
+        ctypes.c_void_p.in_dll(library, "mjcb_time").value = None
+        _library.append(library)
+    return _library[0]
+
+
+_library: list[ctypes.CDLL] = []
+
+
+def _mj_step_address() -> int:
+    """MuJoCo's C `mj_step`, which the controller calls itself (sim/native/mjcontrol.c says why)."""
+    return ctypes.cast(_mujoco_library().mj_step, ctypes.c_void_p).value
 
 
 def _native_control():

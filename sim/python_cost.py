@@ -35,13 +35,14 @@ def _runtime_dir():
 class PythonCost:
     """While installed (in the program's thread), the program's and the runtime's calls cost time.
 
-    The counting runs in C (sim/native/python_cost: one dictionary lookup per call); which code
+    The counting runs in C (sim/native/python_cost: one read of a slot on the code object per call); which code
     counts and where the time goes is decided here.
     """
 
     def __init__(self, clock):
         import openbricks_pycost
 
+        self._clock = clock
         self._runtime = _runtime_dir()
         self._cost = openbricks_pycost.Cost(self._counts, clock.charge_cpu_us, CALL_US, BATCH_US)
         self._saved = None
@@ -56,9 +57,11 @@ class PythonCost:
     def install(self):
         self._saved = sys.getprofile()
         self._cost.install()
+        self._clock.python_cost = self._cost
         return self
 
     def uninstall(self):
+        self._clock.python_cost = None
         self._cost.uninstall()
         if self._saved is not None:
             sys.setprofile(self._saved)

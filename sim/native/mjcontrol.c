@@ -21,8 +21,11 @@
  *     the world's own MotorProcess (firmware loops inside simulated devices,
  *     such as a serial-bus servo's speed loop) through openbricks_native's
  *     C-API, then writes every wheel's motor torque. Controller.step(n) arms
- *     it for exactly n steps and runs them in one mujoco.mj_step(nstep=n)
- *     call, so n milliseconds of controlled motion cost one Python call.
+ *     it for exactly n steps and calls MuJoCo's C mj_step n times itself,
+ *     holding the GIL: n milliseconds of controlled motion cost one Python
+ *     call, and no step pays for giving the GIL away and taking it back (the
+ *     ticks need it), which cost as much as the control itself. Other threads
+ *     still get the GIL every STEPS_PER_GIL_RELEASE steps.
  *
  * The callback only acts while armed and only for the mjData it was built
  * for, so mj_forward calls made between steps (sensors, viewers) never tick
@@ -70,7 +73,8 @@ static void control_step(const void *model, void *data) {
     }
     self->armed--;
     uint32_t now_ms = (uint32_t)self->now_ms;
-    /* mujoco.mj_step releases the GIL while it steps; the ticks handle Python objects. */
+    /* The ticks handle Python objects. Controller.step holds the GIL, so this is a check, but an
+     * mj_step called from elsewhere (mujoco.mj_step releases the GIL) must take it. */
     PyGILState_STATE gil = PyGILState_Ensure();
     if (capi->motor_process_tick(capi->motor_process, now_ms) < 0) {
         keep_error(self);
@@ -108,9 +112,9 @@ static int double_array(PyObject *data, const char *name, double **out, Py_ssize
 }
 
 static int ctl_init(ControllerObject *self, PyObject *args, PyObject *kwargs) {
-    static char *kwlist[] = {"model", "data", "world", NULL};
-    PyObject *model, *data, *world = Py_None;
-    if (!PyArg_ParseTupleAndKeywords(args, kwargs, "OO|O:Controller", kwlist, &model, &data, &world)) {
+    static char *kwlist[] = {"model", "data", "mj_step", "world", NULL};
+    PyObject *model, *data, *mj_step, *world = Py_None;
+    if (!PyArg_ParseTupleAndKeywords(args, kwargs, "OOO|O:Controller", kwlist, &model, &data, &mj_step, &world)) {
         return -1;
     }
     if (self->data != NULL) {
@@ -143,22 +147,21 @@ static int ctl_init(ControllerObject *self, PyObject *args, PyObject *kwargs) {
         double_array(data, "ctrl", &ctrl, &nu) < 0) {
         return -1;
     }
-    PyObject *mujoco = PyImport_ImportModule("mujoco");
-    if (mujoco == NULL) {
+    PyObject *model_address_obj = PyObject_GetAttrString(model, "_address");
+    if (model_address_obj == NULL) {
         return -1;
     }
-    PyObject *mj_step = PyObject_GetAttrString(mujoco, "mj_step");
-    Py_DECREF(mujoco);
-    if (mj_step == NULL) {
+    void *model_address = PyLong_AsVoidPtr(model_address_obj);
+    Py_DECREF(model_address_obj);
+    mj_step_fn step_fn = (mj_step_fn)PyLong_AsVoidPtr(mj_step);
+    if (model_address == NULL || step_fn == NULL) {
+        if (!PyErr_Occurred()) {
+            PyErr_SetString(PyExc_ValueError, "Controller: needs the MjModel's address and mj_step's (nonzero)");
+        }
         return -1;
     }
-    PyObject *step_args = PyTuple_Pack(2, model, data);
-    if (step_args == NULL) {
-        Py_DECREF(mj_step);
-        return -1;
-    }
-    Py_XSETREF(self->mj_step, mj_step);
-    Py_XSETREF(self->step_args, step_args);
+    self->model_address = model_address;
+    self->mj_step = step_fn;
     Py_XSETREF(self->model, Py_NewRef(model));
     Py_XSETREF(self->data, Py_NewRef(data));
     Py_XSETREF(self->world, world == Py_None ? NULL : Py_NewRef(world));
@@ -178,8 +181,6 @@ static int ctl_init(ControllerObject *self, PyObject *args, PyObject *kwargs) {
 static int ctl_traverse(ControllerObject *self, visitproc visit, void *arg) {
     Py_VISIT(self->model);
     Py_VISIT(self->data);
-    Py_VISIT(self->step_args);
-    Py_VISIT(self->mj_step);
     Py_VISIT(self->world);
     Py_VISIT(self->error_type);
     Py_VISIT(self->error_value);
@@ -192,8 +193,6 @@ static int ctl_clear(ControllerObject *self) {
     self->data_address = NULL;
     Py_CLEAR(self->model);
     Py_CLEAR(self->data);
-    Py_CLEAR(self->step_args);
-    Py_CLEAR(self->mj_step);
     Py_CLEAR(self->world);
     Py_CLEAR(self->error_type);
     Py_CLEAR(self->error_value);
@@ -333,20 +332,17 @@ static PyObject *ctl_step(ControllerObject *self, PyObject *arg) {
     if (n == 0) {
         Py_RETURN_NONE;
     }
-    PyObject *kwargs = Py_BuildValue("{s:l}", "nstep", n);
-    if (kwargs == NULL) {
-        return NULL;
-    }
     uint64_t start_ms = self->now_ms;
     self->armed = n;
-    PyObject *result = PyObject_Call(self->mj_step, self->step_args, kwargs);
+    for (long i = 1; i <= n; i++) {
+        self->mj_step(self->model_address, self->data_address);
+        if (i % STEPS_PER_GIL_RELEASE == 0) {
+            Py_BEGIN_ALLOW_THREADS
+            Py_END_ALLOW_THREADS
+        }
+    }
     long missed = self->armed;
     self->armed = 0;
-    Py_DECREF(kwargs);
-    if (result == NULL) {
-        return NULL;
-    }
-    Py_DECREF(result);
     if (self->error_type != NULL) {
         PyErr_Restore(self->error_type, self->error_value, self->error_tb);
         self->error_type = self->error_value = self->error_tb = NULL;
@@ -387,7 +383,7 @@ static PyMethodDef ctl_methods[] = {
     {"activate", (PyCFunction)ctl_activate, METH_NOARGS, "Make this the controller the control callback serves."},
     {"deactivate", (PyCFunction)ctl_deactivate, METH_NOARGS, "Stop serving this controller."},
     {"step", (PyCFunction)ctl_step, METH_O,
-     "step(n): n controlled physics steps (n ms) in one mujoco.mj_step(nstep=n) call. Raises the first error "
+     "step(n): n controlled physics steps (n ms), MuJoCo's mj_step called from C. Raises the first error "
      "a tick raised, once the steps are done."},
     {NULL, NULL, 0, NULL},
 };

@@ -17,6 +17,13 @@
 #define MAX_WHEELS 8
 #define RAD_TO_DEG (180.0 / 3.14159265358979323846)
 
+/* MuJoCo's void mj_step(const mjModel *m, mjData *d), found in its library at run time: this
+ * extension does not link MuJoCo, whose Python package carries the one library every part uses. */
+typedef void (*mj_step_fn)(const void *model, void *data);
+
+/* A long Controller.step() lets other Python threads (a viewer, a pacer) run this often. */
+#define STEPS_PER_GIL_RELEASE 50
+
 typedef struct {
     const double *qpos; /* joint angle, rad, inside mjData */
     const double *qvel; /* joint speed, rad/s */
@@ -33,10 +40,10 @@ typedef struct {
     PyObject_HEAD
     PyObject *model;
     PyObject *data;
-    PyObject *step_args; /* (model, data) for mujoco.mj_step */
-    PyObject *mj_step;
     PyObject *world; /* MotorProcess of the simulated devices, or NULL */
-    void *data_address;
+    void *model_address;   /* mjModel * */
+    void *data_address;    /* mjData * */
+    mj_step_fn mj_step;    /* MuJoCo's own C mj_step */
     double *qpos, *qvel, *ctrl;
     Py_ssize_t nq, nv, nu;
     wheel_t wheels[MAX_WHEELS];

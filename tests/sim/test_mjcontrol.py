@@ -6,6 +6,7 @@ import mujoco
 import pytest
 
 import openbricks_native as native
+from openbricks_sim import physics as physics_module
 from openbricks_sim.physics import Physics
 
 
@@ -132,7 +133,7 @@ def test_a_controller_cannot_be_moved_onto_another_mjdata(physics):
     io = physics.wheel_io(0)
     other = mujoco.MjData(physics.model)
     with pytest.raises(RuntimeError, match="already initialised"):
-        controller.__init__(physics.model, other)
+        controller.__init__(physics.model, other, physics_module._mj_step_address())
     io.write_duty(40)
     physics.step(50)
     assert io.read_angle() == pytest.approx(physics.wheel_angle_deg(0), abs=360 / 4096)
