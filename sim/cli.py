@@ -26,6 +26,7 @@ import time
 from openbricks_sim.job import (
     BARE_0X29_PARTS,  # noqa: F401 - kept in step with sensors.rig by a test
     CHASSIS_NAMES,  # noqa: F401
+    INSTALL_HINT,
     RANGE_FINDERS,  # noqa: F401 - kept in step with sensors.rig by a test
     WORLD_NAMES,  # noqa: F401 - kept in step with worlds.WORLDS by a test
     JobError,
@@ -39,7 +40,6 @@ from openbricks_sim.job import (
     world_file,
 )
 from openbricks_sim.program_robot import DEFAULT_CHASSIS
-from openbricks_sim.run_process import INSTALL_HINT
 
 EXIT_OK = 0
 EXIT_FAILED = 1

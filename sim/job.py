@@ -65,6 +65,17 @@ class JobError(ValueError):
     """A job that cannot run as given; the message names the field and what it accepts."""
 
 
+INSTALL_HINT = (
+    "the simulator needs MuJoCo, which comes with the [sim] extra: pipx install 'openbricks[sim]' "
+    "(or pip install 'openbricks[sim]')"
+)
+
+
+class SimulatorUnavailable(BaseException):
+    """MuJoCo would not load when the program first touched the hardware: the run ends with the install
+    hint. A BaseException, so a program's `except Exception` cannot carry on without a robot."""
+
+
 class UnknownWorldError(ValueError):
     """A --world that names no world: the message says what it accepts."""
 

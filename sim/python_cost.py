@@ -35,8 +35,8 @@ def _runtime_dir():
 class PythonCost:
     """While installed (in the program's thread), the program's and the runtime's calls cost time.
 
-    The counting runs in C (sim/native/python_cost: one read of a slot on the code object per call); which code
-    counts and where the time goes is decided here.
+    The counting runs in C (sim/native/python_cost: one read of a slot on the code object per call);
+    which code counts and where the time goes is decided here.
     """
 
     def __init__(self, clock):

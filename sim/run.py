@@ -21,6 +21,7 @@ prints the result as JSON; `openbricks sim run` starts it (run_process.py).
 import _thread
 import argparse
 import contextlib
+import functools
 import gc
 import io
 import json
@@ -46,6 +47,7 @@ from .job import (
     JobError,
     SimJob,
     SimResult,
+    SimulatorUnavailable,
     UnknownWorldError,
     add_place_arguments,
     add_run_arguments,
@@ -59,7 +61,6 @@ from .python_cost import PythonCost
 from .run_flash import HubDirError, RunFlash, prepare_hub_dir
 from .shim import Shim
 from .simulation import Simulation
-from .worlds import final_state
 
 
 class _Output(io.TextIOBase):
@@ -110,14 +111,16 @@ class ProgramRun:
         try:
             with (
                 _interruptible(),
-                Shim(sim),
+                Shim(sim) as shim,
                 RunFlash(self.hub_dir) as flash,
                 ProgramRobot(sim),
                 PythonCost(sim.clock),
             ):
+                sim.on_build = functools.partial(_building, shim, sim.clock)
                 sys.stdout = sys.stderr = output
-                # MuJoCo, the world and the runtime are built: out of the collector's reach, each
-                # collection the program's allocations start no longer walks all of them again.
+                # What is built so far (the runtime's shim, MuJoCo if a caller built it) out of the
+                # collector's reach: each collection the program's allocations start no longer walks
+                # all of it again. The physics, built at the first hardware use, joins it then.
                 gc.freeze()
                 if watchdog is not None:
                     watchdog.start()
@@ -131,6 +134,8 @@ class ProgramRun:
                     exit_reason = WALL_LIMIT if self._wall_expired else STOPPED
                 except CpuLimitExceeded:
                     exit_reason = CPU_LIMIT
+                except SimulatorUnavailable as exc:
+                    exit_reason, error = ERROR, f"{exc}\n"
                 except MemoryError as exc:
                     exit_reason = MEMORY_LIMIT
                     error = flash.python.traceback.format(exc, program=True)
@@ -148,15 +153,14 @@ class ProgramRun:
         wall_s = time.perf_counter() - started
         if exit_reason in LIMIT_MESSAGES:
             error = (error or "") + LIMIT_MESSAGES[exit_reason](wall_limit_s, sim.clock.now_ms()) + "\n"
-        pose = sim.physics.pose()
+        sim.on_build = None
         sim_ms = sim.clock.now_ms()
-        scoring = sim.physics.world.score
-        score = scoring(final_state(sim.physics.model, sim.physics.data)) if scoring else None
+        pose, score = _final_pose_and_score(sim)
         return SimResult(
             exit=exit_reason,
             sim_ms=sim_ms,
             wall_s=round(wall_s, 4),
-            pose={"x_mm": pose.x_mm, "y_mm": pose.y_mm, "heading_deg": pose.heading_deg},
+            pose=pose,
             output=output.text(),
             error=error,
             real_time_factor=round(sim_ms / 1000 / wall_s, 2) if wall_s > 0 else None,
@@ -168,6 +172,43 @@ class ProgramRun:
     def _wall_limit_reached(self):
         self._wall_expired = True
         _thread.interrupt_main()
+
+
+def _final_pose_and_score(sim) -> tuple[dict, dict | None]:
+    """Where the robot ended and the world's score. A program that never touched the hardware on the
+    empty world ends where it stood, with no MuJoCo built for it; no pose when MuJoCo would not load."""
+    resting = sim.resting_pose_mm_deg()
+    if resting is not None:
+        x_mm, y_mm, heading_deg = resting
+        return {"x_mm": x_mm, "y_mm": y_mm, "heading_deg": heading_deg}, None
+    try:
+        physics = sim.physics
+    except SimulatorUnavailable:
+        return {}, None
+    from .worlds import final_state
+
+    pose = physics.pose()
+    scoring = physics.world.score
+    score = scoring(final_state(physics.model, physics.data)) if scoring else None
+    return {"x_mm": pose.x_mm, "y_mm": pose.y_mm, "heading_deg": pose.heading_deg}, score
+
+
+@contextlib.contextmanager
+def _building(shim, clock):
+    """Around the physics' build in the middle of a program: the host's own modules (the program's
+    `time` is the shim's) while MuJoCo and the world import, no Python-time charge for it (it is
+    the simulator's work, not the hub's), and what it built frozen out of the collector's reach."""
+    cost = clock.python_cost
+    counting = cost is not None and cost.counting
+    if counting:
+        cost.pause()
+    try:
+        with shim.host_modules():
+            yield
+        gc.freeze()
+    finally:
+        if counting:
+            cost.resume()
 
 
 @contextlib.contextmanager

@@ -25,12 +25,8 @@ import sys
 import threading
 import time
 
-from .job import CPU_LIMIT, ERROR, EXIT_STATUS, STOPPED, WALL_LIMIT, SimJob, SimResult
+from .job import CPU_LIMIT, ERROR, EXIT_STATUS, INSTALL_HINT, STOPPED, WALL_LIMIT, SimJob, SimResult
 
-INSTALL_HINT = (
-    "the simulator needs MuJoCo, which comes with the [sim] extra: pipx install 'openbricks[sim]' "
-    "(or pip install 'openbricks[sim]')"
-)
 GRACE_S = 10.0  # start-up (imports, the world's build) plus the child's own wall-limit handling
 FORWARDED_SIGNALS = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
 # `python -m openbricks_sim.run`, except that a Ctrl-C while the simulator still imports ends the

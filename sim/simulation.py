@@ -13,14 +13,20 @@ serial-bus servo's own speed loop) runs on the simulation's world_process.
 import openbricks_native
 
 from .clock import SimClock
+from .job import INSTALL_HINT, SimulatorUnavailable
 from .pacing import Pacer
-from .physics import Physics
-from .robot import wire
-from .sensors.rig import I2C_BUS, attach_sensors, wire_bare_colour_sensor
 from .shim.board import SimBoard
+
+EMPTY_WORLD = "empty"
 
 
 class Simulation:
+    """The physics (MuJoCo, the world, the robot's wiring and sensors) is built when something first
+    needs it: the program touching the hardware (`machine`, the serial bus), or a caller reading
+    `physics`, `wiring`, `sensors`, `controller` or `world_process`. Until then time passes on the
+    clock alone, so a program that only computes and prints never pays for MuJoCo, and the robot
+    stands at rest where it starts, as it would have anyway."""
+
     def __init__(
         self,
         world="empty",
@@ -38,25 +44,105 @@ class Simulation:
     ):
         """speed: a real-time factor to pace at (None: as fast as the CPU allows, no pacer at all).
         `range_finder` and `bare_0x29` choose the sensor rig's parts (see sensors/rig.py)."""
-        self.physics = Physics(world, chassis, seed, start_mm_deg, wheel_diameter_mm, axle_track_mm)
+        self._place = (world, chassis, seed, start_mm_deg)
+        self._geometry = (wheel_diameter_mm, axle_track_mm)
+        self._rig = {"range_finder": range_finder, "bare_0x29": bare_0x29}
+        self._built = None  # (physics, world_process, controller, wiring, sensors) once built
+        self._unbuilt_ms = 0  # simulated time that passed before the physics was built
+        self.on_build = None  # (callable) run by the first hardware use, before the build (run.py)
+        # A fresh hub: no controllers left over from an earlier run in this process.
+        openbricks_native.motor_process.reset()
+        self.clock = SimClock(self, limit_ms=limit_ms, epoch_ms=epoch_ms)
+        self.pacer = None
+        if speed is not None:
+            self.pace(speed)
+        self.board = SimBoard(self.clock, before_first_use=self._build)
+        self.nvs = nvs if nvs is not None else {}
+
+    # --- the physics, built on first use -------------------------------------------------------
+
+    @property
+    def built(self) -> bool:
+        return self._built is not None
+
+    @property
+    def physics(self):
+        return self._build()[0]
+
+    @property
+    def world_process(self):
+        return self._build()[1]
+
+    @property
+    def controller(self):
+        return self._build()[2]
+
+    @property
+    def wiring(self):
+        return self._build()[3]
+
+    @property
+    def sensors(self):
+        return self._build()[4]
+
+    def _build(self):
+        if self._built is not None:
+            return self._built
+        self.board.before_first_use = None
+        if self.on_build is not None:
+            with self.on_build():
+                return self._build_now()
+        return self._build_now()
+
+    def _build_now(self):
         try:
-            # A fresh hub: no controllers left over from an earlier run in this process.
-            openbricks_native.motor_process.reset()
-            self.world_process = openbricks_native.MotorProcess()
-            self.controller = self.physics.attach_control(self.world_process)
-            self.clock = SimClock(self.physics, limit_ms=limit_ms, epoch_ms=epoch_ms)
-            self.pacer = None
-            if speed is not None:
-                self.pace(speed)
-            self.board = SimBoard(self.clock)
-            self.nvs = nvs if nvs is not None else {}
-            self.wiring = wire(self.physics, self.board, self.world_process)
-            self.sensors = attach_sensors(
-                self.physics, self.board, seed, range_finder=range_finder, bare_0x29=bare_0x29
-            )
+            from .physics import Physics
+            from .robot import wire
+            from .sensors.rig import attach_sensors
+        except ImportError as exc:
+            if not _mujoco_failed(exc):
+                raise
+            raise SimulatorUnavailable(f"{INSTALL_HINT} ({exc})") from None
+
+        world, chassis, seed, start_mm_deg = self._place
+        physics = Physics(world, chassis, seed, start_mm_deg, *self._geometry)
+        try:
+            world_process = openbricks_native.MotorProcess()
+            controller = physics.attach_control(world_process)
+            controller.now_ms = self._unbuilt_ms
+            wiring = wire(physics, self.board, world_process)
+            sensors = attach_sensors(physics, self.board, seed, **self._rig)
         except BaseException:
-            self.physics.close()
+            physics.close()
             raise
+        self._built = (physics, world_process, controller, wiring, sensors)
+        return self._built
+
+    # --- what the clock drives ----------------------------------------------------------------
+
+    @property
+    def now_ms(self) -> int:
+        """Simulated milliseconds the physics has reached (the clock's, before it is built)."""
+        if self._built is None:
+            return self._unbuilt_ms
+        return self._built[0].now_ms
+
+    def step(self, n_ms: int) -> None:
+        if self._built is None:
+            self._unbuilt_ms += max(0, n_ms)
+        else:
+            self._built[0].step(n_ms)
+
+    def resting_pose_mm_deg(self):
+        """Before the physics is built, where the robot stands, if that is known without building it:
+        on the empty world (no mission to score) it is the start pose, the origin unless given (as
+        worlds.WORLDS["empty"] has it). None once built, or on any other world."""
+        world, _chassis, _seed, start_mm_deg = self._place
+        if self._built is not None or world != EMPTY_WORLD:
+            return None
+        return tuple(float(v) for v in start_mm_deg) if start_mm_deg is not None else (0.0, 0.0, 0.0)
+
+    # --- pacing and devices -------------------------------------------------------------------
 
     def pace(self, speed=1.0, **options):
         """Pace this simulation from now on with a new Pacer (pacing.py; options: on_frame,
@@ -86,6 +172,8 @@ class Simulation:
         """The program built a TCS34725 straight on I2C bus `i2c_key`: wire one there (bus 0 only).
 
         False when the rig already has another part at 0x29 on that bus (--bare-0x29 said so)."""
+        from .sensors.rig import I2C_BUS, wire_bare_colour_sensor
+
         if i2c_key != I2C_BUS:
             return True
         return wire_bare_colour_sensor(self.sensors, self.physics, self.board, self.physics.seed)
@@ -100,5 +188,16 @@ class Simulation:
         if self.pacer is not None:
             self.pacer.stop()
         openbricks_native.motor_process.reset()
-        self.world_process.reset()
-        self.physics.close()
+        if self._built is not None:
+            physics, world_process = self._built[0], self._built[1]
+            world_process.reset()
+            physics.close()
+
+
+def _mujoco_failed(exc: ImportError) -> bool:
+    """Whether this ImportError is MuJoCo's (not there, or there but not loading): anything else is a bug."""
+    try:
+        import mujoco  # noqa: F401 - the import is the question
+    except ImportError:
+        return True
+    return False

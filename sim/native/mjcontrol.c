@@ -363,6 +363,26 @@ static PyObject *ctl_get_now_ms(ControllerObject *self, void *closure) {
     return PyLong_FromUnsignedLongLong(self->now_ms);
 }
 
+/* A simulation whose physics is built when the program first touches the hardware starts its clock
+ * where the program's time already is. */
+static int ctl_set_now_ms(ControllerObject *self, PyObject *value, void *closure) {
+    (void)closure;
+    if (value == NULL) {
+        PyErr_SetString(PyExc_AttributeError, "Controller.now_ms cannot be deleted");
+        return -1;
+    }
+    unsigned long long now_ms = PyLong_AsUnsignedLongLong(value);
+    if (now_ms == (unsigned long long)-1 && PyErr_Occurred()) {
+        return -1;
+    }
+    if (self->armed > 0) {
+        PyErr_SetString(PyExc_RuntimeError, "Controller.now_ms cannot change while it steps");
+        return -1;
+    }
+    self->now_ms = now_ms;
+    return 0;
+}
+
 static PyObject *ctl_get_n_wheels(ControllerObject *self, void *closure) {
     (void)closure;
     return PyLong_FromLong(self->n_wheels);
@@ -389,7 +409,8 @@ static PyMethodDef ctl_methods[] = {
 };
 
 static PyGetSetDef ctl_getset[] = {
-    {"now_ms", (getter)ctl_get_now_ms, NULL, "Simulated milliseconds: controlled steps run so far.", NULL},
+    {"now_ms", (getter)ctl_get_now_ms, (setter)ctl_set_now_ms,
+     "Simulated milliseconds: where the clock started plus the controlled steps run since.", NULL},
     {"n_wheels", (getter)ctl_get_n_wheels, NULL, "Number of wheels added.", NULL},
     {"world", (getter)ctl_get_world, NULL, "The world's MotorProcess (simulated device firmware), or None.",
      NULL},
@@ -401,7 +422,7 @@ static PyTypeObject ControllerType = {
     .tp_name = "openbricks_mjcontrol.Controller",
     .tp_basicsize = sizeof(ControllerObject),
     .tp_flags = Py_TPFLAGS_DEFAULT | Py_TPFLAGS_HAVE_GC,
-    .tp_doc = "Controller(model, data, world=None)\n\n"
+    .tp_doc = "Controller(model, data, mj_step, world=None)\n\n"
               "The simulated robot's motors and the per-step control callback: each physics step ticks the hub's "
               "motor_process and the world's MotorProcess, then applies every wheel's DC-motor torque.",
     .tp_new = PyType_GenericNew,

@@ -131,6 +131,31 @@ class Shim:
             del sys.print_exception
         _installed[0] = None
 
+    def host_modules(self):
+        """A context in which sys.modules has the host's own entries for the shimmed names again (the
+        simulator importing MuJoCo in the middle of a program must get the host's `time`)."""
+        import contextlib
+
+        @contextlib.contextmanager
+        def swapped():
+            saved_modules = self._saved[0] if self._saved is not None else {}
+            shimmed = {name: sys.modules.get(name) for name in saved_modules}
+            for name, module in saved_modules.items():
+                if module is None:
+                    sys.modules.pop(name, None)
+                else:
+                    sys.modules[name] = module
+            try:
+                yield
+            finally:
+                for name, module in shimmed.items():
+                    if module is None:
+                        sys.modules.pop(name, None)
+                    else:
+                        sys.modules[name] = module
+
+        return swapped()
+
     def __enter__(self):
         return self.install()
 

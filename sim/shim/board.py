@@ -30,8 +30,11 @@ the robot move.
 class SimBoard:
     """The devices and signals around one simulated hub."""
 
-    def __init__(self, clock):
+    def __init__(self, clock, before_first_use=None):
+        """before_first_use(): called once, when the program first reaches the board through `machine`
+        (the simulation builds its physics then)."""
         self.clock = clock
+        self.before_first_use = before_first_use
         self.uart_devices = {}  # uart id -> device
         self.i2c_devices = {}  # bus key -> {address: device}
         self.spi_devices = {}  # cs pin -> device

@@ -23,6 +23,8 @@ def _sim():
     board = _board[0]
     if board is None:
         raise RuntimeError("the simulator's machine module is not bound to a simulated hub")
+    if getattr(board, "before_first_use", None) is not None:
+        board.before_first_use()  # the simulation builds its physics at the first hardware use
     return board
 
 
