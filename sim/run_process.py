@@ -2,9 +2,12 @@
 
     result, status = run_in_child(SimJob("square.py", world="wro"), quiet=True)
 
-The child is `python -m openbricks_sim.run` (run.py), which fences itself in (limits.contain:
+The child runs `python -m openbricks_sim.run` (run.py), which fences itself in (limits.contain:
 memory, CPU time, file size, no new processes), runs the program, prints its output and report
-on the terminal it shares with us, and sends its RunResult as JSON over a pipe. This side:
+on the terminal it shares with us, and sends its RunResult as JSON over a pipe. It is a fork of
+this process when that is safe (forked.py: one thread, an OS with fork()), so a run starts from
+what the CLI has imported instead of a new interpreter's start-up; a new interpreter otherwise.
+This side:
 
 - starts it in a session of its own with no stdin, so the terminal's Ctrl-C (and a SIGTERM or
   SIGHUP to the CLI) reaches only the CLI, which passes exactly one interrupt on: the program
@@ -17,6 +20,7 @@ on the terminal it shares with us, and sends its RunResult as JSON over a pipe. 
 
 from __future__ import annotations
 
+import functools
 import json
 import os
 import signal
@@ -25,25 +29,29 @@ import sys
 import threading
 import time
 
+from .forked import can_fork, fork_child
 from .job import CPU_LIMIT, ERROR, EXIT_STATUS, INSTALL_HINT, STOPPED, WALL_LIMIT, SimJob, SimResult
 
 GRACE_S = 10.0  # start-up (imports, the world's build) plus the child's own wall-limit handling
 FORWARDED_SIGNALS = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
-# `python -m openbricks_sim.run`, except that a Ctrl-C while the simulator still imports ends the
-# child quietly instead of with a traceback of numpy's start-up, and a MuJoCo that is there but
-# does not load (a missing system library) is the run's result with the install hint: the CLI
-# only looked for MuJoCo, it did not import it.
+# A spawned child's program (where this process cannot fork): child_main() in a new interpreter.
 CHILD_MAIN = (
-    "import sys\n"
-    "try:\n"
-    "    from openbricks_sim.run import main\n"
-    "except KeyboardInterrupt:\n"
-    "    sys.exit(130)\n"
-    "except ImportError as exc:\n"
-    "    from openbricks_sim.run_process import report_import_error\n"
-    "    sys.exit(report_import_error(exc, sys.argv[1:]))\n"
-    "sys.exit(main(sys.argv[1:]))\n"
+    "import sys\nfrom openbricks_sim.run_process import child_main\nsys.exit(child_main(sys.argv[1:]))\n"
 )
+
+
+def child_main(child_args: list[str]) -> int:
+    """The child's side: `python -m openbricks_sim.run`, except that a Ctrl-C while the simulator
+    still imports ends it quietly instead of with a traceback of the imports, and a MuJoCo that is
+    there but does not load (a missing system library) is the run's result with the install hint:
+    the CLI only looked for MuJoCo, it did not import it."""
+    try:
+        from .run import main
+    except KeyboardInterrupt:
+        return 130
+    except ImportError as exc:
+        return report_import_error(exc, child_args)
+    return main(child_args)
 
 
 def run_in_child(job: SimJob, viewer=False, silent=False, quiet=False, stop=None) -> tuple[SimResult, int]:
@@ -85,14 +93,7 @@ def run_in_child(job: SimJob, viewer=False, silent=False, quiet=False, stop=None
     killed_for_time = False
     try:
         try:
-            child = subprocess.Popen(
-                [sys.executable, "-c", CHILD_MAIN, *child_args, "--result-fd", str(write_end)],
-                stdin=subprocess.DEVNULL,
-                stdout=subprocess.DEVNULL if quiet else None,
-                stderr=subprocess.DEVNULL if quiet else None,
-                pass_fds=(write_end,),
-                start_new_session=True,
-            )
+            child = _start_child([*child_args, "--result-fd", str(write_end)], write_end, read_end, quiet)
         finally:
             os.close(write_end)
         children.append(child)
@@ -117,6 +118,32 @@ def run_in_child(job: SimJob, viewer=False, silent=False, quiet=False, stop=None
     if interrupts and result.exit == STOPPED:
         return result, EXIT_STATUS[STOPPED]
     return result, EXIT_STATUS.get(result.exit, 1)
+
+
+def _start_child(child_args, write_end, read_end, quiet):
+    """The child, forked when that is safe (a ForkedChild), else a new interpreter (a Popen): the same
+    child_main() with no stdin, in a session of its own, the result pipe's write end its only extra."""
+    if can_fork():
+        devnull = os.open(os.devnull, os.O_RDWR)
+        try:
+            return fork_child(
+                functools.partial(child_main, child_args),
+                stdin=devnull,
+                stdout=devnull if quiet else None,
+                stderr=devnull if quiet else None,
+                pass_fds=(write_end,),
+                close_fds=(read_end, devnull),
+            )
+        finally:
+            os.close(devnull)
+    return subprocess.Popen(
+        [sys.executable, "-c", CHILD_MAIN, *child_args],
+        stdin=subprocess.DEVNULL,
+        stdout=subprocess.DEVNULL if quiet else None,
+        stderr=subprocess.DEVNULL if quiet else None,
+        pass_fds=(write_end,),
+        start_new_session=True,
+    )
 
 
 def _wait(child, timeout_s, stop, interrupts) -> bool:
