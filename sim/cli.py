@@ -20,6 +20,7 @@ from __future__ import annotations
 import argparse
 import importlib.util
 import json
+import os
 import sys
 import time
 
@@ -255,20 +256,18 @@ def _preview(args) -> int:
 
 
 def _program(path: str):
-    """(Path, text) of the program file, refused before any world is built if it is not one."""
-    from pathlib import Path
-
-    script = Path(path)
-    if script.is_dir():
-        raise SimCliError(f"{script} is a folder: give the program's .py file")
-    if not script.is_file():
-        raise SimCliError(f"{script}: no such program file")
+    """(path, text) of the program file, refused before any world is built if it is not one."""
+    if os.path.isdir(path):
+        raise SimCliError(f"{path} is a folder: give the program's .py file")
+    if not os.path.isfile(path):
+        raise SimCliError(f"{path}: no such program file")
     try:
-        source = script.read_text(encoding="utf-8")
+        with open(path, encoding="utf-8") as program:
+            source = program.read()
     except UnicodeDecodeError as exc:
-        raise SimCliError(f"{script} is not UTF-8 text ({exc.reason} at byte {exc.start})") from None
-    _check_syntax(source, script.name)
-    return script, source
+        raise SimCliError(f"{path} is not UTF-8 text ({exc.reason} at byte {exc.start})") from None
+    _check_syntax(source, os.path.basename(path))
+    return path, source
 
 
 def _run(args) -> int:
@@ -289,8 +288,6 @@ def _run(args) -> int:
 
 def _check_syntax(source: str, filename: str) -> None:
     """A syntax error as Python shows one (file, line, the line, a caret), before any world is built."""
-    import traceback
-
     if "\x00" in source:
         raise SimCliError(
             f"{filename} contains a NUL byte (0x00), which program text never does: is it binary?"
@@ -298,6 +295,8 @@ def _check_syntax(source: str, filename: str) -> None:
     try:
         compile(source, filename, "exec", dont_inherit=True)
     except SyntaxError as exc:
+        import traceback
+
         raise SimCliError("".join(traceback.format_exception_only(exc)).rstrip()) from None
 
 

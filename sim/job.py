@@ -84,10 +84,10 @@ def world_file(name_or_path: str):
     """None for a world alias; else the MJCF file it names, as a Path that exists and ends in .xml.
 
     Whether MuJoCo can load the file is worlds.resolve's to find out: this stays MuJoCo-free."""
-    from pathlib import Path
-
     if name_or_path in WORLD_ALIASES:
         return None
+    from pathlib import Path
+
     path = Path(name_or_path)
     if path.suffix.lower() == ".xml" or path.exists():
         if not path.is_file():

@@ -28,7 +28,6 @@ module is the layer that holds when they are bypassed.
 import ctypes
 import errno
 import os
-import platform
 import resource
 import signal
 import struct
@@ -198,7 +197,7 @@ def forbid_new_processes():
     """Install the seccomp filter: fork, vfork, clone of a process, execve and execveat fail with
     EPERM from now on, in this process and its threads. Needs no_new_privileges() first (or root).
     On a machine whose architecture has no table here, nothing is installed."""
-    table = _SYSCALLS.get(platform.machine())
+    table = _SYSCALLS.get(os.uname().machine)
     if table is None:
         return False
     instructions = _filter_program(*table)

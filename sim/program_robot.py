@@ -20,7 +20,6 @@ is what a mirrored servo without invert=True does.
 
 import ast
 import functools
-import importlib.abc
 import inspect
 import math
 import sys
@@ -181,7 +180,7 @@ def _print_note(line):
     print(line)
 
 
-class _ConstructorWatch(importlib.abc.MetaPathFinder):
+class _ConstructorWatch:  # a meta path finder (find_spec is all the import system asks of one)
     """Loads the watched runtime modules normally, then wraps one class's __init__ in each (and any
     methods named with it)."""
 
@@ -206,7 +205,7 @@ class _ConstructorWatch(importlib.abc.MetaPathFinder):
         return spec
 
 
-class _WrappingLoader(importlib.abc.Loader):
+class _WrappingLoader:  # a loader: create_module() and exec_module()
     def __init__(self, loader, class_name, before, around=None):
         self._loader = loader
         self._class_name = class_name

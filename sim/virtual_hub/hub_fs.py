@@ -16,7 +16,6 @@ fails with ENOSPC, and statvfs() reports the space as the hub would.
 import errno
 import io
 import os
-import secrets
 import stat
 from collections import namedtuple
 
@@ -255,7 +254,7 @@ class HubFS:
 
     @staticmethod
     def urandom(n):
-        return secrets.token_bytes(n)
+        return os.urandom(n)
 
 
 class _FlashFile(io.FileIO):

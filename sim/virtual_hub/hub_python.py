@@ -28,7 +28,6 @@ interpreter's internals). The process's OS-level fence (limits.contain) is what 
 """
 
 import builtins
-import importlib.abc
 import importlib.machinery
 import importlib.util
 import os
@@ -136,7 +135,7 @@ class TracebackFormatter:
 # -- imports -----------------------------------------------------------------------------------
 
 
-class _HubLoader(importlib.abc.Loader):
+class _HubLoader:  # a loader: create_module() and exec_module() (importlib.abc costs its import)
     """Runs a module with the hub's builtins: a runtime module through its own loader, or a file
     from the flash compiled under its hub path."""
 
@@ -169,7 +168,7 @@ class _HubLoader(importlib.abc.Loader):
             return f.read()
 
 
-class HubFinder(importlib.abc.MetaPathFinder):
+class HubFinder:  # a meta path finder: find_spec() is all the import system asks of one
     """On sys.meta_path of the hub process: the runtime and flash packages' submodules."""
 
     def __init__(self, hub):
