@@ -1,5 +1,7 @@
 # One entry point for a fresh machine: `make console` and `make test` set up
-# everything they need (system packages, the virtualenv, npm packages) first.
+# everything they need first. `make console` installs only what the console and its manual need
+# (the virtualenv with the sim and docs extras, the console's npm packages); `make test` adds the test
+# tooling (the dev extra, system packages, the runtime tests' npm package).
 
 PYTHON ?= python3
 VENV := .venv
@@ -20,9 +22,14 @@ MICROPY_BUILD := $(REPO_ROOT)/build/micropython
 UNIX_MICROPYTHON := $(MICROPY_BUILD)/micropython
 NATIVE_SOURCES := $(wildcard firmware/native/*.[ch] firmware/native/platform/* firmware/native/user_c_modules/openbricks/* firmware/native/user_c_modules/openbricks_bench/*)
 
-.PHONY: setup system-packages test test-fast lint console bench micropython web web-check docs firmware-check dist
+.PHONY: setup console-setup system-packages test test-fast lint console bench micropython web web-check docs firmware-check dist
 
 setup: $(VENV)/.installed $(MPY_NODE)
+
+# What `make console` and `make docs` need: the console, the simulator behind the virtual hubs, the
+# manual's toolchain, and the build system's requirements (pyproject.toml's [build-system]), which
+# `setup.py build_ext --inplace` runs on (a new venv's setuptools is too old for the project's metadata).
+console-setup: $(VENV)/.console-installed
 
 system-packages:
 	@missing=""; for p in $(APT_PACKAGES); do dpkg -s $$p >/dev/null 2>&1 || missing="$$missing $$p"; done; \
@@ -32,9 +39,15 @@ system-packages:
 		$$SUDO apt-get update -qq && DEBIAN_FRONTEND=noninteractive $$SUDO apt-get install -y -qq $$missing >/dev/null; \
 	fi
 
-$(VENV)/.installed: pyproject.toml setup.py | system-packages
+$(VENV)/.console-installed: pyproject.toml setup.py build_backend.py
 	$(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install -q --upgrade pip
+	$(PY) -m pip install -q $$($(PY) -c "import tomllib; print(*tomllib.load(open('pyproject.toml', 'rb'))['build-system']['requires'])")
+	$(PY) -m pip install -q -e '.[sim,docs]'
+	touch $@
+
+# Everything the tests use on top: the dev extra (pytest, Playwright's driver, ruff, ...).
+$(VENV)/.installed: $(VENV)/.console-installed | system-packages
 	$(PY) -m pip install -q -e '.[dev,sim,docs]'
 	touch $@
 
@@ -67,7 +80,7 @@ $(WEB_NODE): web/package.json web/package-lock.json
 	touch $@
 
 $(WEB_STATIC)/index.html: $(WEB_NODE) $(WEB_SOURCES)
-	cd web && npm run build --silent
+	cd web && npm run build --silent -- --logLevel warn
 	touch $@
 
 # Type-check (svelte-check) and the unit tests (vitest).
@@ -86,7 +99,7 @@ DOCS_HTML := server/docs_html
 DOCS_SOURCES := $(shell find docs examples openbricks -type f -not -path 'docs/_screenshots/*' -not -name '*.pyc' 2>/dev/null) \
 	server/cli.py $(wildcard build/artifacts/*/*.png)
 
-$(DOCS_HTML)/index.html: $(DOCS_SOURCES) | $(VENV)/.installed
+$(DOCS_HTML)/index.html: $(DOCS_SOURCES) | $(VENV)/.console-installed
 	$(PY) setup.py -q build_ext --inplace
 	$(PY) -m sphinx -W --keep-going -q -b html -d build/docs-doctrees docs $(DOCS_HTML)
 	touch $@
@@ -118,10 +131,12 @@ test-fast: setup micropython web docs
 
 # The embedded default: the console daemon with two simulated hubs (virtual hub + MuJoCo each), no
 # hardware. It runs in the foreground and prints the URL to open (with its sign-in token); Ctrl-C stops
-# it and its virtual hubs. The `openbricks` CLI in another terminal goes through it.
-console: setup web
+# it and its virtual hubs. The `openbricks` CLI in another terminal goes through it. Options go to
+# `openbricks console` (see its --help): make console ARGS="--port 9000 --no-ble".
+ARGS ?=
+console: console-setup web docs
 	$(PY) setup.py -q build_ext --inplace
-	$(VENV)/bin/openbricks console
+	$(VENV)/bin/openbricks console $(ARGS)
 
 bench: setup
 	$(PY) setup.py -q build_ext --inplace

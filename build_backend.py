@@ -15,8 +15,8 @@ A build that would need the pages and cannot make them stops with the reason: a 
 console or the manual is never produced. An archive is also opened after it is written and refused if
 either site is missing from it, so a packaging rule that stops matching cannot ship one either.
 
-Editable installs (`make setup`) pass straight through: they read the source tree, where `make web`
-and `make docs` build the pages.
+Editable installs (`make setup`, `make console`) pass straight through: they read the source tree, where
+`make web` and `make docs` build the pages.
 """
 
 from __future__ import annotations
@@ -29,12 +29,12 @@ import sys
 import tarfile
 import tempfile
 import tomllib
+import warnings
 import zipfile
 from pathlib import Path
 
 from setuptools import build_meta as _setuptools
 from setuptools.build_meta import (  # noqa: F401 - re-exported: the hooks this backend leaves as they are
-    build_editable,
     get_requires_for_build_editable,
     prepare_metadata_for_build_editable,
     prepare_metadata_for_build_wheel,
@@ -247,3 +247,14 @@ def build_wheel(wheel_directory, config_settings=None, metadata_directory=None):
     path = Path(wheel_directory) / name
     _check_archive(path, _wheel_names(path), WHEEL_REQUIRED)
     return name
+
+
+def build_editable(wheel_directory, config_settings=None, metadata_directory=None):
+    """setuptools' editable build, without its notice that an editable install of a package whose folder
+    is named otherwise (server/ is openbricks_server) goes through an import finder: true of every
+    install of this tree, it would only add a dozen lines of banner to every `make console`."""
+    from setuptools.warnings import InformationOnly
+
+    with warnings.catch_warnings():
+        warnings.filterwarnings("ignore", message=r"\s*Editable installation\.", category=InformationOnly)
+        return _setuptools.build_editable(wheel_directory, config_settings, metadata_directory)

@@ -10,7 +10,8 @@ from glob import glob
 from setuptools import Extension, find_packages, setup
 
 PACKAGE_FOLDERS = {"openbricks": "openbricks", "openbricks_server": "server", "openbricks_sim": "sim"}
-# The example programs the console offers (openbricks_server.examples reads them from here when installed).
+# The example programs the console offers (openbricks_server.examples reads them from here when installed):
+# the folder's own modules only, not its subfolders (computer-side scripts, the printed manual's listings).
 EXAMPLES = {"openbricks_server.example_programs": "examples"}
 NATIVE = "firmware/native"
 # Emulated servos in C, for the simulator and the unix port's tests (not built into a hub).
@@ -28,11 +29,6 @@ def packages() -> list[str]:
 setup(
     packages=packages(),
     package_dir={**PACKAGE_FOLDERS, **EXAMPLES},
-    exclude_package_data={
-        "openbricks_sim": ["native/*", "native/*/*"],
-        # Computer-side scripts and the printed manual's verbatim listings: not programs to offer a hub.
-        "openbricks_server.example_programs": ["host/*", "manual/*"],
-    },
     ext_modules=[
         Extension(
             "openbricks_native",
