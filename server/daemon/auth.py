@@ -269,7 +269,16 @@ def operator_action(conn: HTTPConnection, caller: Caller, action: str) -> Iterat
     except Exception:
         audit.add(caller.label, caller.role, action, 500)
         raise
-    audit.add(caller.label, caller.role, action, 200)
+    audit.add(caller.label, caller.role, action, getattr(conn.state, "audit_status", 200))
+
+
+STARTED = 202  # the audit status of a request that started jobs: each job's own entry says how it ended
+
+
+def audit_as_started(request: Request) -> None:
+    """A route that starts jobs calls this: its request is audited as started, not done, and each job's
+    end is audited with its real outcome (JobRegistry), so a failed flash never reads "done"."""
+    request.state.audit_status = STARTED
 
 
 async def require_operator(request: Request, caller: Caller = Depends(require_viewer)):

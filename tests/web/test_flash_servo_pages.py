@@ -66,6 +66,9 @@ def test_flash_two_ports_from_the_page_one_succeeds_one_fails_alone(
     ghost.locator("input[type=text]").fill("Ghost")
     assert "firmware/build_firmware.sh" in page.locator("[data-testid=firmware]").inner_text()
     page.get_by_role("button", name="Flash selected (2)").click()  # no image chosen, no release to take
+    confirm = page.locator("[data-testid=flash-confirm]")
+    assert "none chosen" in confirm.inner_text()  # it asks first, saying which image it would write
+    confirm.get_by_role("button", name="Flash 2 hubs").click()
     refused = page.locator(".notice", has_text="no firmware image")
     refused.wait_for()
     assert "firmware/build_firmware.sh" in refused.inner_text()
@@ -73,6 +76,15 @@ def test_flash_two_ports_from_the_page_one_succeeds_one_fails_alone(
     page.set_input_files("input[aria-label='Firmware image']", str(image))
     page.locator("[data-testid=firmware]", has_text="esp32s3, version 2.8.0, written at 0x0").wait_for()
     page.get_by_role("button", name="Flash selected (2)").click()
+    # One confirmation before anything is written: the ports, the image, its version and the names.
+    asked = confirm.inner_text()
+    for shown in (board.pty, "/dev/ttyUSB97", "firmware.bin", "version 2.8.0", "RobotW", "Ghost"):
+        assert shown in asked, (shown, asked)
+    screenshot(page, "flash-confirm")
+    confirm.get_by_role("button", name="Cancel").click()  # cancelled: nothing starts
+    assert confirm.count() == 0 and ghost.locator("[data-testid=flash-state]").count() == 0
+    page.get_by_role("button", name="Flash selected (2)").click()
+    confirm.get_by_role("button", name="Flash 2 hubs").click()
 
     ghost.locator("[data-testid=flash-state]", has_text="failed").wait_for()
     assert "there is no such port" in ghost.locator("[data-testid=flash-message]").inner_text()
@@ -108,6 +120,12 @@ def test_flash_two_ports_from_the_page_one_succeeds_one_fails_alone(
     page.wait_for_function("() => document.querySelectorAll('[data-testid=job-row]').length === 1")
     screenshot(page, "history-jobs")
     assert watcher.errors == [] and page.errors == [], (watcher.errors, page.errors)
+
+    # The audit log says how each flash ended, not that the request was taken.
+    page.goto(f"{usb_console.base}/#/audit")
+    page.locator("tr", has_text="flash /dev/ttyUSB97").filter(has_text="failed").wait_for()
+    page.locator("tr", has_text=f"flash {board.pty}").filter(has_text="done").wait_for()
+    assert page.locator("tr", has_text="/api/flash").filter(has_text="started").count() >= 1
 
     viewer = page_for(usb_console.sign_in_url(usb_console.mint("viewer"), "flash"))
     viewer.locator("[data-testid=readonly-reason]").wait_for()

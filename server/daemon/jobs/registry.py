@@ -30,6 +30,8 @@ log = logging.getLogger("openbricks.console")
 JobState = Literal["queued", "running", "done", "failed", "cancelled"]
 FINISHED: frozenset[str] = frozenset({"done", "failed", "cancelled"})
 MAX_STEPS = 200  # step lines kept per job
+# A finished job's audit entry, in the audit log's HTTP-like statuses: 200 done, 4xx/5xx failed.
+JOB_AUDIT_STATUS = {"done": 200, "failed": 500, "cancelled": 503}
 
 
 class JobFailed(Exception):
@@ -136,6 +138,8 @@ class JobRegistry:
         elif state == "done":
             job.message = "done"
         self._changed(job)
+        # Only an operator's request starts a job; its entry said "started", this one says how it ended.
+        self.store.audit.add(job.who, "operator", f"{job.kind} {job.label}", JOB_AUDIT_STATUS[state])
         self._live.pop(job.job_id, None)
         self._finished.pop(job.job_id).set()
 

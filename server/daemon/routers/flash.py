@@ -16,7 +16,7 @@ import asyncio
 from fastapi import APIRouter, Depends, Query, Request
 from pydantic import BaseModel, Field
 
-from openbricks_server.daemon.auth import Caller, require_operator, require_viewer
+from openbricks_server.daemon.auth import Caller, audit_as_started, require_operator, require_viewer
 from openbricks_server.daemon.competition import unlocked
 from openbricks_server.daemon.errors import ApiError
 from openbricks_server.daemon.hubs.errors import HubOperationError
@@ -196,6 +196,7 @@ async def start_flash(body: FlashBody, request: Request, caller: Caller = FLASH_
                 "no_firmware", str(exc), "build the image, then upload its firmware.bin"
             ) from None
     batch, jobs = flash.start(targets, image, body.allow_downgrade, caller.label, releases)
+    audit_as_started(request)
     return FlashStarted(batch=batch, jobs=[JobOut(**job.record()) for job in jobs])
 
 

@@ -8,7 +8,7 @@ from fastapi import APIRouter, Depends, Query, Request
 from fastapi.responses import Response
 from pydantic import BaseModel, Field
 
-from openbricks_server.daemon.auth import Caller, require_operator, require_viewer
+from openbricks_server.daemon.auth import Caller, audit_as_started, require_operator, require_viewer
 from openbricks_server.daemon.competition import unlocked
 from openbricks_server.daemon.errors import ApiError
 from openbricks_server.daemon.programs import check_name
@@ -87,6 +87,7 @@ async def start_sweep(request: Request, body: SweepRequest, caller: Caller = STA
     job = _sweeps(request).start(
         template, seeds, found["source"], found["version"], body.workers, body.dask, caller.label
     )
+    audit_as_started(request)
     return JobOut(**job.record())
 
 

@@ -140,3 +140,27 @@ def test_the_history_lists_jobs_by_state_and_pages_back_through_older_ones(tmp_p
         store.close()
 
     asyncio.run(main())
+
+
+def test_each_finished_job_is_audited_with_its_real_outcome(tmp_path):
+    """The request that started a flash is audited as started (202); the audit log's word for the job
+    itself must be its outcome, so a failed flash never reads "done"."""
+
+    async def main():
+        store, jobs, _ = _registry(tmp_path)
+
+        async def fails(job):
+            raise JobFailed("there is no such port")
+
+        async def works(job):
+            return {}
+
+        bad = jobs.create("flash", "/dev/ttyUSB97", "mentor", {})
+        await jobs.start(bad, fails)
+        good = jobs.create("flash", "/dev/ttyUSB0", "mentor", {})
+        await jobs.start(good, works)
+        entries = [(e["who"], e["action"], e["status"]) for e in reversed(store.audit.list())]
+        assert entries == [("mentor", "flash /dev/ttyUSB97", 500), ("mentor", "flash /dev/ttyUSB0", 200)]
+        store.close()
+
+    asyncio.run(main())
