@@ -88,6 +88,11 @@ def world_file(name_or_path: str):
         return None
     from pathlib import Path
 
+    from .world_file import open_world
+
+    spec = open_world(name_or_path)  # a world file or IMAGE@WxH: checked whole, every problem told
+    if spec is not None:
+        return spec.path
     path = Path(name_or_path)
     if path.suffix.lower() == ".xml" or path.exists():
         if not path.is_file():
@@ -98,7 +103,9 @@ def world_file(name_or_path: str):
             )
         return path
     known = ", ".join(sorted(WORLD_ALIASES))
-    raise UnknownWorldError(f"unknown world {name_or_path!r}: use one of {known}, or a path to an MJCF file")
+    raise UnknownWorldError(
+        f"unknown world {name_or_path!r}: use one of {known}, a world file (.toml) or an MJCF file (.xml)"
+    )
 
 
 @dataclass(frozen=True)
@@ -217,6 +224,7 @@ class SimResult:
     peak_rss_mb: float | None = None
     job: dict = field(default_factory=dict)
     score: dict | None = None  # the world's scoring hook on the final state; None: no mission
+    build_s: float | None = None  # of wall_s, building the physics at the first hardware use; None: never
 
     def to_json(self) -> str:
         return json.dumps(asdict(self))
@@ -230,6 +238,7 @@ class SimResult:
             "score": self.score,
             "sim_s": self.sim_ms / 1000,
             "wall_s": self.wall_s,
+            "build_s": self.build_s,
             "real_time_factor": self.real_time_factor,
             "error": self.error,
             "output": self.output,
@@ -318,7 +327,18 @@ def add_place_arguments(parser: argparse.ArgumentParser) -> None:
     """Where the robot is: world, chassis and start pose (metres and counter-clockwise yaw, as the
     manual's simulator chapter has them)."""
     parser.add_argument(
-        "--world", default="empty", help=f"World name ({WORLD_NAMES}) or an MJCF file. Default: %(default)s."
+        "--world",
+        default="empty",
+        help=(
+            f"World name ({WORLD_NAMES}), a world file (.toml), a mat image (.png, .jpg, .pdf, with "
+            "--mat-size) or an MJCF file (.xml). Default: %(default)s."
+        ),
+    )
+    parser.add_argument(
+        "--mat-size",
+        metavar="WxH",
+        type=mat_size_argument,
+        help="With --world IMAGE: the mat's printed size in mm (e.g. 2362x1143); an empty walled table.",
     )
     parser.add_argument(
         "--chassis",
@@ -411,6 +431,23 @@ def add_run_arguments(parser: argparse.ArgumentParser, single_run: bool = True) 
     )
 
 
+def mat_size_argument(text: str) -> tuple[float, float]:
+    from .world_file import mat_size_argument as parse
+
+    try:
+        return parse(text)
+    except ValueError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+
+
+def sized_world(args) -> str:
+    """--world, with --mat-size folded in as IMAGE@WxH: the one string a SimJob carries."""
+    size = getattr(args, "mat_size", None)
+    if size is None:
+        return args.world
+    return f"{args.world}@{size[0]:g}x{size[1]:g}"
+
+
 def start_pose(args, world_start_mm_deg) -> tuple[float, float, float] | None:
     """(x_mm, y_mm, heading_deg) from the metre/yaw options, the world's start filling the gaps."""
     if args.x is None and args.y is None and args.yaw is None:
@@ -432,10 +469,10 @@ def job_from_args(args, program: str) -> SimJob:
     elif args.x is not None or args.y is not None or args.yaw is not None:
         from .worlds import resolve
 
-        start = start_pose(args, resolve(args.world).start_mm_deg)
+        start = start_pose(args, resolve(sized_world(args)).start_mm_deg)
     return SimJob(
         program=str(program),
-        world=args.world,
+        world=sized_world(args),
         chassis=args.chassis,
         seed=getattr(args, "seed", 0),
         start_mm_deg=start,

@@ -161,6 +161,7 @@ class ProgramRun:
             sim_ms=sim_ms,
             wall_s=round(wall_s, 4),
             pose=pose,
+            build_s=sim.build_s,
             output=output.text(),
             error=error,
             real_time_factor=round(sim_ms / 1000 / wall_s, 2) if wall_s > 0 else None,

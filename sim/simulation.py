@@ -10,6 +10,8 @@ the physics step ticks natively; firmware inside simulated devices (each
 serial-bus servo's own speed loop) runs on the simulation's world_process.
 """
 
+import time
+
 import openbricks_native
 
 from .clock import SimClock
@@ -48,6 +50,7 @@ class Simulation:
         self._geometry = (wheel_diameter_mm, axle_track_mm)
         self._rig = {"range_finder": range_finder, "bare_0x29": bare_0x29}
         self._built = None  # (physics, world_process, controller, wiring, sensors) once built
+        self.build_s = None  # how long the build took, once built
         self._unbuilt_ms = 0  # simulated time that passed before the physics was built
         self.on_build = None  # (callable) run by the first hardware use, before the build (run.py)
         # A fresh hub: no controllers left over from an earlier run in this process.
@@ -89,10 +92,14 @@ class Simulation:
         if self._built is not None:
             return self._built
         self.board.before_first_use = None
-        if self.on_build is not None:
+        started = time.perf_counter()
+        try:
+            if self.on_build is None:
+                return self._build_now()
             with self.on_build():
                 return self._build_now()
-        return self._build_now()
+        finally:
+            self.build_s = round(time.perf_counter() - started, 4)
 
     def _build_now(self):
         try:

@@ -22,6 +22,7 @@ def test_a_program_that_only_computes_never_loads_mujoco():
     assert done.stdout.strip().endswith("False"), done.stdout
     assert done.stdout.startswith("finished 499500 25")
     assert "'x_mm': 0.0, 'y_mm': 0.0, 'heading_deg': 0.0" in done.stdout
+    assert run_program("compute.py", source=ONLY_COMPUTES).build_s is None
 
 
 def test_hardware_first_touched_late_runs_on_the_programs_time():
@@ -44,6 +45,7 @@ def test_hardware_first_touched_late_runs_on_the_programs_time():
     assert late.exit == on_time.exit == FINISHED, late.error
     assert int(late.output) - int(on_time.output) in range(1495, 1506)
     assert abs(late.pose["x_mm"] - on_time.pose["x_mm"]) < 1.0, "the same drive, 1.5 s later"
+    assert 0 < late.build_s < late.wall_s, "the build is part of the run's wall time, and said so"
 
 
 def test_the_start_pose_is_where_an_untouched_robot_rests():
