@@ -37,6 +37,7 @@ from openbricks_sim.job import (
     add_seed_argument,
     job_from_args,
     positive_argument,
+    sized_world,
     start_pose,
     world_file,
 )
@@ -156,6 +157,8 @@ def main(argv: list[str] | None = None) -> int:
     if args.command is None:
         parser.print_help()
         return EXIT_OK
+    args.world = sized_world(args)  # IMAGE@WxH from --world IMAGE --mat-size WxH
+    args.mat_size = None
     try:
         _require_mujoco(loaded_here=args.command != "run" or args.no_shim or args.viewer)
         if args.command == "preview":

@@ -12,6 +12,7 @@ from dataclasses import dataclass
 import mujoco
 
 from ..job import UnknownWorldError, world_file
+from ..world_file import WorldSpec, open_world
 from . import arena, empty, line_track, wro, zones
 from .scoring import FinalState, Scoring, final_state
 
@@ -23,6 +24,21 @@ class World:
     build: Callable[[int], mujoco.MjSpec]  # seed -> scene spec
     start_mm_deg: tuple[float, float, float] = (0.0, 0.0, 0.0)  # x, y, heading
     score: Scoring | None = None  # FinalState -> score dict; None: the world has no mission
+    spec: WorldSpec | None = None  # the world file it was read from, if any
+
+
+def from_spec(spec: WorldSpec) -> World:
+    """A World of a checked world file: its scene is built per seed, its mat read once per process."""
+    from . import from_file
+
+    return World(
+        spec.name,
+        spec.description,
+        lambda seed: from_file.build_scene(spec, seed),
+        spec.start_mm_deg,
+        from_file.scorer(spec),
+        spec,
+    )
 
 
 WORLDS: dict[str, World] = {
@@ -61,9 +77,13 @@ __all__ = ["WORLDS", "FinalState", "Scoring", "UnknownWorldError", "World", "fin
 
 
 def resolve(name_or_path: str) -> World:
-    """An alias from WORLDS, or an MJCF file (its own floor and props; start at the origin)."""
+    """An alias from WORLDS, a world file (.toml, or a mat image as IMAGE@WxH), or an MJCF file (its
+    own floor and props; start at the origin)."""
     if name_or_path in WORLDS:
         return WORLDS[name_or_path]
+    spec = open_world(name_or_path)  # raises WorldFileError (an UnknownWorldError) naming each problem
+    if spec is not None:
+        return from_spec(spec)
     path = world_file(name_or_path)  # what can be told without MuJoCo, told the same way everywhere
     if path is None:  # an alias of job.WORLD_ALIASES that WORLDS lacks: a test keeps them in step
         raise UnknownWorldError(f"unknown world {name_or_path!r}")
