@@ -154,6 +154,8 @@ def scorer(spec: WorldSpec):
             "points": _number(total),
             "rules": [_number(p) for p in per_rule],
             "zones": {body: zone_of(*spec.to_centre(*xy)) for body, (_kind, xy) in props.items()},
+            # where each prop ended on the mat (lower-left frame, mm): a sweep's rows show the draw
+            "props": {body: [round(xy[0], 1), round(xy[1], 1)] for body, (_kind, xy) in props.items()},
             "robot_zone": zone_of(state.robot.x_mm, state.robot.y_mm) if state.robot else None,
         }
         if spec.time_limit_s is not None:

@@ -53,7 +53,7 @@ slots = "north"
 [[props]]
 name = "pusher_target"
 colour = "green"
-at = [700, 571]
+at = [500, 1000]
 
 [[zones]]
 name = "parking"
@@ -61,7 +61,7 @@ rect = [2000, 450, 2300, 700]
 
 [[zones]]
 name = "green_goal"
-polygon = [[1000, 450], [1300, 450], [1300, 700], [1000, 700]]
+polygon = [[1000, 900], [1300, 900], [1300, 1120], [1000, 1120]]
 
 [[scoring]]
 prop = "green"

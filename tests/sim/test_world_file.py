@@ -23,7 +23,7 @@ def test_a_good_file_reads_its_start_props_slots_zones_and_rules(tmp_path):
     ]
     assert len(spec.slots["north"].positions) == 5
     assert [z.name for z in spec.zones] == ["parking", "green_goal"]
-    assert spec.zones[1].contains(1000, 450) and not spec.zones[1].contains(999, 500)
+    assert spec.zones[1].contains(1000, 900) and not spec.zones[1].contains(999, 950)
     assert [(r.zone, r.points, r.robot) for r in spec.rules] == [
         ("green_goal", 25, False),
         ("parking", 5, True),

@@ -110,7 +110,7 @@ def test_five_seeds_give_five_layouts_and_a_seed_gives_its_layout_again(table):
 
 
 def test_the_rules_score_a_prop_in_its_zone_and_the_robot_parked(world):
-    inside = Pose(1150 - HALF_W, 575 - HALF_H, 0.0)
+    inside = Pose(1150 - HALF_W, 1000 - HALF_H, 0.0)
     outside = Pose(700 - HALF_W, 571 - HALF_H, 0.0)
     parked = Pose(2100 - HALF_W, 600 - HALF_H, 0.0)
     score = world.score(FinalState(robot=parked, props={"prop_00_pusher_target": inside}, time_s=10.0))
