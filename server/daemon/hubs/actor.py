@@ -24,6 +24,7 @@ its output resumes where it stopped (the hub holds it meanwhile) and the gap is 
 
 from __future__ import annotations
 
+import ast
 import asyncio
 import contextlib
 import dataclasses
@@ -67,6 +68,7 @@ log = logging.getLogger(__name__)
 ENTER_TIMEOUT_S = 10.0
 HAND_BACK_TIMEOUT_S = 3.0
 RUN_TIMEOUT_S = 24 * 3600.0
+REPL_TIMEOUT_S = 600.0  # a REPL entry that loops ends with Stop (Ctrl-C) long before this
 STOP_CONFIRM_S = 5.0
 STOP_RESEND_S = 1.0
 IDLE_READ_S = 3600.0
@@ -738,6 +740,20 @@ class HubActor:
         reply = await (await self._submit("identify", who, work))
         return {"identify_ms": reply["identify_ms"]}
 
+    async def repl(self, code: str, *, who: str, timeout_s: float = REPL_TIMEOUT_S) -> dict:
+        """Run `code` in the hub's raw REPL as one operation, as its interactive prompt would: an
+        expression's value is printed (and kept in `_`). A traceback is the answer, not a failure."""
+        source = repl_source(code)
+
+        async def work():
+            try:
+                result = await self._repl.exec(source, timeout_s=timeout_s)
+            except HubException as exc:
+                return {"output": _text(exc.stdout), "error": exc.traceback.rstrip("\n")}
+            return {"output": _text(result.stdout), "error": None}
+
+        return await (await self._submit("repl", who, work))
+
     async def host_calls(self, operation: str, who: str, work: Callable[[Callable], Awaitable[Any]]) -> Any:
         """`work(call)` as one operation (`call(name, timeout_s=..., **args)` makes a host call on the
         hub): a servo scan or re-ID, the same code the CLI runs with its own session's `call`."""
@@ -840,6 +856,21 @@ class HubActor:
             "stopped": True,
             "detail": _stopped_detail(holder, run),
         }
+
+
+def repl_source(code: str) -> str:
+    """What the hub runs for one REPL entry: a lone expression becomes `_ = (...)` and its repr is
+    printed unless None, as an interactive prompt shows it; anything else runs as written. Whether the
+    entry is an expression is decided by CPython's parser, the grammar MicroPython follows."""
+    try:
+        ast.parse(code, "<repl>", "eval")
+    except (SyntaxError, ValueError, RecursionError, MemoryError):
+        return code  # statements (or a syntax error, which the hub reports in its own words)
+    return f"_ = ({code}\n)\nif _ is not None:\n    print(repr(_))\n"
+
+
+def _text(data: bytes) -> str:
+    return data.decode("utf-8", "replace").replace("\r\n", "\n")
 
 
 def _stopped_detail(holder: Holder, run: _LiveRun | None) -> str:

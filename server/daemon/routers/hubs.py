@@ -1,6 +1,6 @@
-"""Hubs: list, inspect, connect/disconnect, identify, run, upload, stop, stop-all and the hub's own
-run logs. A hub is addressed by its stable id (`virtual:SimHub-1`, `ble:24:0A:...`) or its current
-name; the routes never know which kind of hub they talk to.
+"""Hubs: list, inspect, connect/disconnect, identify, run, upload, stop, stop-all, the hub's own
+run logs and its REPL. A hub is addressed by its stable id (`virtual:SimHub-1`, `ble:24:0A:...`) or its
+current name; the routes never know which kind of hub they talk to.
 
 Operations are one at a time per hub: a second caller gets 409 `hub_busy` naming the holder
 (operation, who, since when). `stop` and `stop-all` go around that. A run answers once the hub has
@@ -29,6 +29,8 @@ SOURCE_MAX_CHARS = 300_000
 # Operators only, and refused while competition mode locks uploads and new runs.
 RUN_ALLOWED = Depends(unlocked("start a run"))
 UPLOAD_ALLOWED = Depends(unlocked("upload a program"))
+REPL_ALLOWED = Depends(unlocked("use a hub's REPL"))
+REPL_MAX_CHARS = 20_000
 
 
 class Holder(BaseModel):
@@ -98,6 +100,16 @@ class Identified(BaseModel):
 
 class IdentifyRequest(BaseModel):
     duration_ms: int = Field(3000, ge=1, le=30000)
+
+
+class ReplInput(BaseModel):
+    code: str = Field(min_length=1, max_length=REPL_MAX_CHARS, description="a line (or block) of Python")
+
+
+class ReplOutput(BaseModel):
+    hub_id: str
+    output: str  # what the code printed; an expression's value as the interactive prompt shows it
+    error: str | None  # the hub's traceback when the code raised (KeyboardInterrupt after Stop)
 
 
 class StopReport(BaseModel):
@@ -267,6 +279,18 @@ async def upload(
     with hub_errors():
         done = await actor.upload(program, who=caller.label, path=body.path)
     return Uploaded(hub_id=actor.hub_id, path=done["path"], bytes=done["bytes"])
+
+
+@router.post("/{hub}/repl", response_model=ReplOutput)
+async def repl(
+    body: ReplInput, request: Request, hub: str = HubRef, caller: Caller = REPL_ALLOWED
+) -> ReplOutput:
+    """Run one entry in the hub's raw REPL, as one operation (409 while something else holds the hub;
+    Stop interrupts an entry that loops). Names defined by one entry stay for the next."""
+    actor = find_hub(request.app.state.ctx, hub)
+    with hub_errors():
+        done = await actor.repl(body.code, who=caller.label)
+    return ReplOutput(hub_id=actor.hub_id, output=done["output"], error=done["error"])
 
 
 @router.post("/{hub}/stop", response_model=StopReport)

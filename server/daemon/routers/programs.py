@@ -1,11 +1,14 @@
 """Stored programs with their version history: `PUT` saves a new version (after the checks of
-`openbricks_server.daemon.programs`), older versions stay readable."""
+`openbricks_server.daemon.programs`), older versions stay readable and can be restored. Programs are
+renamed, deleted, imported from a file (`POST /programs`, never overwriting unless asked) and
+downloaded as `.py` files."""
 
 from __future__ import annotations
 
 import asyncio
 
-from fastapi import APIRouter, Depends, Path, Request
+from fastapi import APIRouter, Depends, Path, Query, Request
+from fastapi.responses import Response
 from pydantic import BaseModel, Field
 
 from openbricks_server.daemon.auth import Caller, require_operator, require_viewer
@@ -32,6 +35,16 @@ class ProgramSource(ProgramVersionInfo):
 
 class ProgramText(BaseModel):
     source: str = Field(description="the program's Python source text")
+
+
+class ProgramImport(BaseModel):
+    name: str = Field(max_length=200, description="the program's name, e.g. square.py")
+    source: str = Field(description="the file's text")
+    replace: bool = Field(False, description="store it as a new version of an existing program of that name")
+
+
+class Rename(BaseModel):
+    new_name: str = Field(max_length=200, description="the program's new name, e.g. square_v2.py")
 
 
 class Saved(BaseModel):
@@ -79,14 +92,86 @@ async def save_program(
     caller: Caller = Depends(require_operator),
 ) -> Saved:
     """Store the text as the program's newest version (checked first: name, size, text, syntax)."""
-    check_name(name)
-    await asyncio.to_thread(check_source, name, body.source)
+    return await _save(request, check_name(name), body.source, caller.label, "saved")
+
+
+async def _save(request: Request, name: str, source: str, who: str, action: str) -> Saved:
+    """Check and store `source` as `name`'s newest version, announced as `action` when it is new."""
+    await asyncio.to_thread(check_source, name, source)
     ctx = request.app.state.ctx
-    version, created = ctx.store.programs.save(name, body.source, caller.label)
+    version, created = ctx.store.programs.save(name, source, who)
     info = {k: v for k, v in version.items() if k != "source"}
     if created:
-        ctx.events.publish("program", {"action": "saved", **info})
+        ctx.events.publish("program", {"action": action, **info})
     return Saved(program=ProgramVersionInfo(**info), created=created)
+
+
+def _exists(name: str) -> ApiError:
+    return ApiError.conflict(
+        "program_exists",
+        f"a program named {name!r} is already stored",
+        "choose another name, or delete or rename the stored one first",
+        {"name": name},
+    )
+
+
+@router.post("", response_model=Saved, status_code=201)
+async def import_program(
+    body: ProgramImport, request: Request, caller: Caller = Depends(require_operator)
+) -> Saved:
+    """Store a program from a file's text (an upload from disk): refused with 409 when the name is taken,
+    unless `replace` asks to add it as that program's newest version."""
+    name = check_name(body.name)
+    if not body.replace and request.app.state.ctx.store.programs.version(name, None) is not None:
+        raise _exists(name)
+    return await _save(request, name, body.source, caller.label, "imported")
+
+
+@router.get(
+    "/{name}/download",
+    response_class=Response,
+    responses={200: {"content": {"text/x-python": {}}, "description": "the program as a .py file"}},
+)
+async def download_program(
+    request: Request, name: str = ProgramName, version: int | None = Query(None, ge=1, le=2**31)
+) -> Response:
+    """The program's text (the newest version, or `version`) as a file to save."""
+    found = _program(request, name, version)
+    return Response(
+        found["source"].encode("utf-8"),
+        media_type="text/x-python; charset=utf-8",
+        headers={"content-disposition": f'attachment; filename="{found["name"]}"'},
+    )
+
+
+@router.post("/{name}/rename", response_model=ProgramVersionInfo)
+async def rename_program(
+    body: Rename, request: Request, name: str = ProgramName, caller: Caller = Depends(require_operator)
+) -> ProgramVersionInfo:
+    """Give a program, with all its versions, a new name (runs keep the name they ran under)."""
+    old, new = check_name(name), check_name(body.new_name)
+    ctx = request.app.state.ctx
+    if old != new:
+        outcome = ctx.store.programs.rename(old, new)
+        if outcome == "taken":
+            raise _exists(new)
+        if outcome == "missing":
+            raise ApiError.not_found(f"program {old!r}", "GET /api/programs lists the stored programs")
+        ctx.events.publish("program", {"action": "renamed", "name": new, "old_name": old})
+    info = {k: v for k, v in _program(request, new, None).items() if k != "source"}
+    return ProgramVersionInfo(**info)
+
+
+@router.post("/{name}/versions/{version}/restore", response_model=Saved)
+async def restore_version(
+    request: Request,
+    name: str = ProgramName,
+    version: int = Path(ge=1, le=2**31),
+    caller: Caller = Depends(require_operator),
+) -> Saved:
+    """Make an older version's text the newest version again (the versions in between stay)."""
+    found = _program(request, name, version)
+    return await _save(request, found["name"], found["source"], caller.label, "saved")
 
 
 @router.delete("/{name}", status_code=204, dependencies=[Depends(require_operator)])

@@ -76,6 +76,17 @@ class Programs:
             )
         ]
 
+    def rename(self, name: str, new_name: str) -> str:
+        """Give `name` (all its versions) the name `new_name`: "renamed", or why not: "missing" (no
+        program `name`) or "taken" (a program `new_name` exists). Runs keep the name they ran under."""
+        with self.db.transaction() as conn:
+            if conn.execute("SELECT 1 FROM programs WHERE name=?", (new_name,)).fetchone():
+                return "taken"
+            changed = conn.execute(
+                "UPDATE programs SET name=?, updated_ms=? WHERE name=?", (new_name, now_ms(), name)
+            ).rowcount
+        return "renamed" if changed else "missing"
+
     def delete(self, name: str) -> bool:
         with self.db.transaction() as conn:
             return conn.execute("DELETE FROM programs WHERE name=?", (name,)).rowcount > 0

@@ -80,3 +80,60 @@ def test_malformed_requests_get_the_error_shape(operator):
     assert missing.status_code == 422 and missing.json()["message"].startswith("source:")
     wrong_method = operator.post("/api/programs/a.py", json={"source": "x"})
     assert wrong_method.status_code == 405 and set(wrong_method.json()) >= {"error", "message"}
+
+
+def test_rename_moves_every_version_and_refuses_taken_and_bad_names(operator):
+    operator.put("/api/programs/a.py", json={"source": "print(1)\n"})
+    operator.put("/api/programs/a.py", json={"source": "print(2)\n"})
+    operator.put("/api/programs/b.py", json={"source": "print(3)\n"})
+    renamed = operator.post("/api/programs/a.py/rename", json={"new_name": "c.py"})
+    assert renamed.status_code == 200 and renamed.json()["name"] == "c.py" and renamed.json()["version"] == 2
+    assert [v["version"] for v in operator.get("/api/programs/c.py/versions").json()] == [2, 1]
+    assert operator.get("/api/programs/a.py").status_code == 404
+    taken = operator.post("/api/programs/c.py/rename", json={"new_name": "b.py"})
+    assert taken.status_code == 409 and taken.json()["error"] == "program_exists" and taken.json()["hint"]
+    bad = operator.post("/api/programs/c.py/rename", json={"new_name": "../x.py"})
+    assert bad.status_code == 422 and bad.json()["error"] == "bad_program_name"
+    missing = operator.post("/api/programs/nope.py/rename", json={"new_name": "d.py"})
+    assert missing.status_code == 404 and missing.json()["error"] == "not_found"
+    assert operator.post("/api/programs/c.py/rename", json={"new_name": "c.py"}).status_code == 200
+
+
+def test_import_never_overwrites_unless_asked_and_download_gives_the_file(operator):
+    imported = operator.post("/api/programs", json={"name": "disk.py", "source": "print('from disk')\n"})
+    assert imported.status_code == 201 and imported.json()["program"]["version"] == 1
+    again = operator.post("/api/programs", json={"name": "disk.py", "source": "print('other')\n"})
+    assert again.status_code == 409 and again.json()["error"] == "program_exists"
+    replaced = operator.post("/api/programs", json={"name": "disk.py", "source": "x = 2\n", "replace": True})
+    assert replaced.status_code == 201 and replaced.json()["program"]["version"] == 2
+    bad = operator.post("/api/programs", json={"name": "a b.py", "source": "pass\n"})
+    assert bad.status_code == 422 and bad.json()["error"] == "bad_program_name"
+    broken = operator.post("/api/programs", json={"name": "broken.py", "source": "if x\n"})
+    assert broken.status_code == 422 and broken.json()["error"] == "syntax_error"
+    file = operator.get("/api/programs/disk.py/download")
+    assert file.status_code == 200 and file.text == "x = 2\n"
+    assert file.headers["content-disposition"] == 'attachment; filename="disk.py"'
+    assert operator.get("/api/programs/disk.py/download?version=1").text == "print('from disk')\n"
+    assert operator.get("/api/programs/disk.py/download?version=9").status_code == 404
+
+
+def test_restoring_a_version_makes_its_text_the_newest(operator):
+    for text in ("v = 1\n", "v = 2\n", "v = 3\n"):
+        operator.put("/api/programs/r.py", json={"source": text})
+    restored = operator.post("/api/programs/r.py/versions/1/restore").json()
+    assert restored["created"] and restored["program"]["version"] == 4
+    assert operator.get("/api/programs/r.py").json()["source"] == "v = 1\n"
+    assert operator.post("/api/programs/r.py/versions/7/restore").status_code == 404
+
+
+def test_a_viewer_reads_and_downloads_but_changes_nothing(operator, viewer):
+    operator.put("/api/programs/mine.py", json={"source": "pass\n"})
+    assert viewer.get("/api/programs/mine.py/download").status_code == 200
+    refused = [
+        viewer.post("/api/programs", json={"name": "v.py", "source": "pass\n"}),
+        viewer.post("/api/programs/mine.py/rename", json={"new_name": "theirs.py"}),
+        viewer.post("/api/programs/mine.py/versions/1/restore"),
+        viewer.delete("/api/programs/mine.py"),
+    ]
+    assert [r.status_code for r in refused] == [403] * 4
+    assert [p["name"] for p in operator.get("/api/programs").json()] == ["mine.py"]
