@@ -2,12 +2,13 @@
 
     python -m openbricks_sim.console_job SPEC.json
 
-SPEC.json is `{"job": SimJob.to_dict(), "recording": PATH}`: the one job definition every front end
-runs, and where to write the recording. The process fences itself in (limits.contain: memory, CPU
-time, no new processes), serves the run's 3D view on 127.0.0.1 at a free port (the daemon proxies
-it behind its token; the page has no run controls, since anyone who may watch could press them),
-records the scene for replay, and runs the program on its main thread, so a stop or the wall-clock
-limit reaches even a loop that never lets simulated time pass.
+SPEC.json is `{"job": SimJob.to_dict(), "recording": PATH, "plot_tag": NONCE}`: the one job definition
+every front end runs, where to write the recording, and the nonce the program's plot() tags its frames
+with, so the daemon takes them for telemetry with the parser it uses for a hub's output. The process
+fences itself in (limits.contain: memory, CPU time, no new processes), serves the run's 3D view on
+127.0.0.1 at a free port (the daemon proxies it behind its token; the page has no run controls, since
+anyone who may watch could press them), records the scene for replay, and runs the program on its
+main thread, so a stop or the wall-clock limit reaches even a loop that never lets simulated time pass.
 
 Its stdout is the daemon's event channel: one JSON object a line (`ready` with the viewer's port,
 `output` text, `telemetry` of the robot's pose and wheel speeds every TELEMETRY_MS of simulated
@@ -116,7 +117,7 @@ def _read_controls(viewer, events: EventChannel, gone: threading.Event) -> None:
     viewer.request_stop()
 
 
-def run_watched(job: SimJob, recording: str, events: EventChannel) -> SimResult:
+def run_watched(job: SimJob, recording: str, events: EventChannel, plot_tag: str | None = None) -> SimResult:
     """Run `job` with its 3D view served and recorded, reporting to `events` as it goes."""
     from .run import with_source
     from .run_flash import prepare_hub_dir
@@ -144,7 +145,7 @@ def run_watched(job: SimJob, recording: str, events: EventChannel) -> SimResult:
             if gone.is_set():  # the daemon went away while the world was being built
                 viewer.request_stop()
 
-        result = watched_run(viewer, job, source, echo, on_attached=attached)
+        result = watched_run(viewer, job, source, echo, on_attached=attached, plot_tag=plot_tag)
         with open(recording, "wb") as f:
             f.write(viewer.recording())
     return result
@@ -161,7 +162,7 @@ def main(argv=None) -> int:
     # process was started with SIGINT ignored.
     signal.signal(signal.SIGINT, signal.default_int_handler)
     try:
-        result = run_watched(job, spec["recording"], events)
+        result = run_watched(job, spec["recording"], events, spec.get("plot_tag"))
     except Exception as exc:  # noqa: BLE001 - the simulator could not start: that is the run's result
         text = "".join(traceback.format_exception_only(type(exc), exc)).strip()
         traceback.print_exc()

@@ -23,6 +23,7 @@ import argparse
 import contextlib
 import functools
 import gc
+import importlib
 import io
 import json
 import os
@@ -97,7 +98,11 @@ class ProgramRun:
     def request_stop(self):
         self.simulation.clock.request_stop()
 
-    def run(self, source, filename="main.py", wall_limit_s=None, echo=None, job=None) -> SimResult:
+    def run(
+        self, source, filename="main.py", wall_limit_s=None, echo=None, job=None, plot_tag=None
+    ) -> SimResult:
+        """`plot_tag`: the nonce of a console that watches the run, which then takes the program's
+        plot() frames for telemetry as it does a hub's; None: plot() prints `plot: name = value`."""
         sim = self.simulation
         code = compile(source, filename, "exec")
         output = _Output(echo)
@@ -118,6 +123,8 @@ class ProgramRun:
             ):
                 sim.on_build = functools.partial(_building, shim, sim.clock)
                 sys.stdout = sys.stderr = output
+                if plot_tag is not None:  # on the runtime the program imports (the shim's fresh one)
+                    importlib.import_module("openbricks.tools")._plot_tag[0] = plot_tag
                 # What is built so far (the runtime's shim, MuJoCo if a caller built it) out of the
                 # collector's reach: each collection the program's allocations start no longer walks
                 # all of it again. The physics, built at the first hardware use, joins it then.

@@ -68,7 +68,7 @@ def serve_run(
             viewer.output.clear()
 
 
-def watched_run(viewer, job, source, echo, on_attached=None) -> SimResult:
+def watched_run(viewer, job, source, echo, on_attached=None, plot_tag=None) -> SimResult:
     """One run of `job` shown and paced by `viewer`, in a fresh Simulation (its clock unpaced).
 
     on_attached(simulation) runs once the viewer shows it, before the program starts (the
@@ -89,6 +89,7 @@ def watched_run(viewer, job, source, echo, on_attached=None) -> SimResult:
                 job.wall_limit(watched=True),
                 echo,
                 {**job.to_dict(), "viewer": True},
+                plot_tag=plot_tag,
             )
         finally:
             viewer.detach(result)

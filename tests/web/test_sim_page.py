@@ -15,12 +15,15 @@ pytestmark = pytest.mark.e2e
 DRIVE = """\
 from openbricks.drivers.st3032 import ST3032Motor
 from openbricks.robotics import DriveBase
+from openbricks.tools import plot
 
 left = ST3032Motor(servo_id=1, uart_id=1, tx=14, rx=41)
 right = ST3032Motor(servo_id=2, uart_id=1, tx=14, rx=41, invert=True)
 db = DriveBase(left, right, wheel_diameter_mm=88, axle_track_mm=138)
 print("driving")
+plot("target_mm", 150)
 db.straight(150)
+plot("target_mm", 0)
 print("arrived")
 """
 RUN_S = 180_000  # a simulator child starts in seconds here, more on a loaded machine
@@ -51,6 +54,12 @@ def test_a_run_started_on_the_page_draws_its_view_then_replays_and_a_sweep_repor
     with console.api() as api:
         (run,) = api.get("/api/sim/runs").json()
     assert run["exit"] == "finished" and run["program_name"] == "drive.py"
+    # plot() in the simulator as on a hub: samples in the run's telemetry, nothing in its output.
+    with console.api() as api:
+        samples = api.get(f"/api/runs/{run['run_id']}/telemetry").json()
+        lines = api.get(f"/api/runs/{run['run_id']}/output").json()["lines"]
+    assert [s["value"] for s in samples if s["name"] == "target_mm"] == [150, 0]
+    assert [line["text"] for line in lines] == ["driving", "arrived"], lines
 
     # A past run, opened from the list on a fresh page: its replay, with its stored output and telemetry.
     again = page_for(console.sign_in_url(console.token, "sim"))
@@ -59,6 +68,7 @@ def test_a_run_started_on_the_page_draws_its_view_then_replays_and_a_sweep_repor
     again.get_by_role("link", name="Replay").wait_for()
     again.locator("[data-testid=sim-output]").get_by_text("arrived").wait_for()
     again.locator("[data-testid=sim-telemetry] .u-legend", has_text="x_mm").wait_for()
+    again.locator("[data-testid=sim-telemetry]", has_text="target_mm").first.wait_for()
     # The same run from the History: its 3D replay, and run again (in the simulator, not on a hub).
     again.goto(f"{console.base}/#/history?run={run['run_id']}")
     again.get_by_role("button", name="3D replay").click()

@@ -7,7 +7,9 @@ User code never runs in the daemon. A run's child (`openbricks_sim.console_job`)
   under the data dir (`sim/RUN_ID/`), where the recording and the child's own log land too;
 - turns its events into the daemon's: output lines and telemetry (pose, wheel speeds) through the
   same `HubEvents` seam hub runs use (so they are in the history, searchable and replayed to
-  reconnecting clients), and `job` events for the Jobs the console pages follow;
+  reconnecting clients), and `job` events for the Jobs the console pages follow; the program's output
+  goes through a hub's `OutputParser` with the nonce the child tags plot() frames with, so its
+  samples are telemetry (stamped with the simulated clock), never output lines, exactly as on a hub;
 - pauses, resumes, changes speed and stops it; a child that does not end STOP_GRACE_S after a stop,
   or is still alive WALL_GRACE_S past its wall-clock limit, is killed (its whole session);
 - records how it ended: the child's result, or, when it died without one, what ended it.
@@ -23,12 +25,14 @@ import contextlib
 import json
 import logging
 import os
+import secrets
 import signal
 import sys
 import time
 from pathlib import Path
 
 from openbricks_server.daemon.hub_events import OutputLine, RunStart, TelemetrySample
+from openbricks_server.daemon.hubs.output import OutputParser
 from openbricks_server.daemon.sim.proxy import ViewRelay, http_client
 from openbricks_server.daemon.store import now_ms
 from openbricks_sim.console_job import CHILD_MAIN
@@ -75,6 +79,10 @@ class SimRunJob:
         self._result: dict | None = None
         self._killed_for: str | None = None  # "stop", "wall", "start": why we killed it, if we did
         self._partial = ""
+        self.plot_tag = secrets.token_hex(4)  # as a hub's: a program cannot forge a sample by printing
+        self._parser = OutputParser(
+            self.plot_tag, self._emit_lines, self._emit_samples, lambda kind, data: None
+        )
         self._line_no = 0
         self._progress_due = 0.0
         self._state_seen = asyncio.Event()  # the child answered a control with its new state
@@ -83,7 +91,11 @@ class SimRunJob:
 
     async def start(self) -> None:
         spec_path = self.run_dir / "job.json"
-        spec = {"job": self.job.to_dict(), "recording": str(self.run_dir / RECORDING_NAME)}
+        spec = {
+            "job": self.job.to_dict(),
+            "recording": str(self.run_dir / RECORDING_NAME),
+            "plot_tag": self.plot_tag,
+        }
         spec_path.write_text(json.dumps(spec), encoding="utf-8")
         with open(self.run_dir / "child.log", "wb") as child_log:
             self._process = await asyncio.create_subprocess_exec(
@@ -148,19 +160,28 @@ class SimRunJob:
         self._partial += text
         if "\n" not in self._partial:
             if len(self._partial) > LINE_MAX_CHARS:
-                self._emit_lines([self._partial])
+                self._parse(self._partial)
                 self._partial = ""
             return
-        *complete, self._partial = self._partial.split("\n")
-        self._emit_lines(complete)
+        complete, _, self._partial = self._partial.rpartition("\n")
+        self._parse(complete)
 
-    def _emit_lines(self, texts: list[str]) -> None:
+    def _parse(self, lines: str) -> None:
+        self._parser.feed((lines + "\n").encode("utf-8", "surrogateescape"))
+
+    def _emit_lines(self, texts: list[tuple[str, int | None]]) -> None:
         received = now_ms()
         lines = []
-        for text in texts:
+        for text, _ in texts:
             self._line_no += 1
             lines.append(OutputLine(self._line_no, text[:LINE_MAX_CHARS], None, received))
         self.jobs.ctx.hub_events.run_output(self.run_id, lines)
+
+    def _emit_samples(self, samples: list[TelemetrySample]) -> None:
+        hub_ms = self.started_ms + self.sim_ms  # the simulated clock, as the pose samples have it
+        for sample in samples:
+            sample.hub_ms = hub_ms
+        self.jobs.ctx.hub_events.run_telemetry(self.run_id, samples)
 
     def _telemetry(self, event: dict) -> None:
         self.sim_ms = int(event["sim_ms"])
@@ -178,7 +199,7 @@ class SimRunJob:
 
     def _finish(self) -> None:
         if self._partial:
-            self._emit_lines([self._partial])
+            self._parse(self._partial)
             self._partial = ""
         result = self._result or self._lost_result()
         recording = self.run_dir / RECORDING_NAME
