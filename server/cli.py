@@ -434,7 +434,11 @@ def _add_console(sub):
         metavar="N",
         help="Virtual hubs (with the simulator behind them) to start. Default: %(default)s.",
     )
-    p.add_argument("--world", help="Simulator world of the virtual hubs (e.g. line_track). Default: empty.")
+    p.add_argument(
+        "--world",
+        help="Simulator world of the virtual hubs: a name (e.g. line_track) or a world file (.toml). "
+        "Default: empty.",
+    )
     p.add_argument("--no-ble", action="store_true", help="Do not scan for or connect to Bluetooth hubs.")
     p.add_argument(
         "--serial",
@@ -478,8 +482,8 @@ def _add_completion(sub):
         help="print the shell code that completes openbricks commands and options",
         description=(
             "Print the code that makes your shell complete openbricks' commands and options. Load it from "
-            "your shell's start-up file: bash: eval \"$(openbricks completion bash)\" in ~/.bashrc; zsh: "
-            "eval \"$(openbricks completion zsh)\" in ~/.zshrc; fish: openbricks completion fish | source "
+            'your shell\'s start-up file: bash: eval "$(openbricks completion bash)" in ~/.bashrc; zsh: '
+            'eval "$(openbricks completion zsh)" in ~/.zshrc; fish: openbricks completion fish | source '
             "in ~/.config/fish/config.fish."
         ),
     )

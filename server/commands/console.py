@@ -16,12 +16,26 @@ def _config(args):
         host=args.host,
         port=args.port,
         virtual=args.virtual,
-        world=args.world,
+        world=_world(args.world),
         data_dir=Path(args.data_dir) if args.data_dir else None,
         ble=not args.no_ble,
         allowed_hosts=tuple(args.allow_host or ()),
         serial_ports=tuple(getattr(args, "serial", None) or ()),
     )
+
+
+def _world(name: str | None) -> str | None:
+    """--world as the virtual hubs take it: an alias, or a world/MJCF file by its absolute path (the
+    hubs run in their own folders), refused here with the file's own problems before anything starts."""
+    if not name:
+        return None
+    from openbricks_sim.job import UnknownWorldError, world_file
+
+    try:
+        path = world_file(name)
+    except UnknownWorldError as exc:
+        raise UsageError(f"--world: {exc}") from None
+    return name if path is None or not Path(name).exists() else str(Path(name).resolve())
 
 
 def _serve(args) -> int:

@@ -70,7 +70,9 @@ def parse_args(argv=None):
     parser.add_argument("--name", "-n", required=True, type=_hub_name, help="the hub's name (NVS hub_name)")
     parser.add_argument("--pty", action="store_true", help="serve on a new pseudo-terminal (else stdio)")
     parser.add_argument("--dir", help="the hub's directory (default: <data dir>/virtual-hubs/NAME)")
-    parser.add_argument("--world", default="empty", help="world alias or MJCF file (default: empty)")
+    parser.add_argument(
+        "--world", default="empty", help="world alias, world file (.toml) or MJCF file (default: empty)"
+    )
     parser.add_argument("--chassis", default="st3032", choices=CHASSIS_NAMES, help="default: st3032")
     add_seed_argument(parser)
     parser.add_argument(
