@@ -10,6 +10,7 @@ from pydantic import BaseModel, Field
 
 from openbricks_server.daemon.auth import LOCAL_LABEL, Caller, require_operator, require_viewer
 from openbricks_server.daemon.errors import ApiError
+from openbricks_server.daemon.network import lan_addresses, room_command, share_bases
 from openbricks_server.daemon.store import LabelTaken
 
 router = APIRouter(prefix="/auth", tags=["auth"], dependencies=[Depends(require_viewer)])
@@ -43,6 +44,30 @@ class MintedToken(TokenInfo):
 @router.get("/me", response_model=Me)
 async def me(caller: Caller = Depends(require_viewer)) -> Me:
     return Me(label=caller.label, role=caller.role, via=caller.via)
+
+
+class ShareInfo(BaseModel):
+    host: str  # the address the console listens on (--host)
+    port: int
+    this_computer_only: bool  # listening on loopback: no other computer can open it
+    bases: list[str]  # base URLs another computer can open (a link is BASE/?token=TOKEN)
+    lan_addresses: list[str]  # this computer's network addresses
+    room_command: str  # how to start the console so that the room reaches it
+
+
+@router.get("/share", response_model=ShareInfo)
+async def share(request: Request) -> ShareInfo:
+    """Where another computer or a phone opens this console, for the links the page hands out."""
+    config = request.app.state.ctx.config
+    lan = lan_addresses()
+    return ShareInfo(
+        host=config.host,
+        port=config.port,
+        this_computer_only=config.is_loopback,
+        bases=share_bases(config, lan),
+        lan_addresses=lan,
+        room_command=room_command(config, lan),
+    )
 
 
 @router.get("/tokens", response_model=list[TokenInfo])

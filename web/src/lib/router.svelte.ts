@@ -13,6 +13,7 @@ export const PAGES = [
   { id: "flash", label: "Flash", key: "7" },
   { id: "servo", label: "Servo-ID", key: "8" },
   { id: "audit", label: "Audit", key: "9" },
+  { id: "share", label: "Share", key: "0" },
 ] as const;
 
 export type PageId = (typeof PAGES)[number]["id"];
