@@ -32,7 +32,7 @@ WORLD_SUFFIX = ".toml"
 MAT_SUFFIXES = (".png", ".jpg", ".jpeg", ".pdf")
 
 # Print colours (sRGB) that read as their names under the colour sensor model; the built-in mats
-# print with the same ones (worlds.canvas re-exports them).
+# print with the same ones (worlds/builtin/canvas.py draws with them).
 PALETTE: dict[str, tuple[int, int, int]] = {
     "white": (246, 246, 242),
     "black": (22, 22, 24),
@@ -47,7 +47,6 @@ DEFAULT_PROP_MASS_G = 50.0
 DEFAULT_PROP_FRICTION = 0.5
 DEFAULT_WALL_HEIGHT_MM = 70.0
 DEFAULT_WALL_THICKNESS_MM = 20.0
-OBSTACLE_RGB = (150, 150, 150)
 
 
 class WorldFileError(UnknownWorldError):
@@ -66,7 +65,8 @@ class Box:
     y_mm: float
     size_mm: tuple[float, float, float]
     heading_deg: float = 0.0
-    rgb: tuple[int, int, int] = OBSTACLE_RGB
+    rgb: tuple[int, int, int] | None = None  # None: plywood, as the walls
+    name: str | None = None
 
 
 @dataclass(frozen=True)
@@ -75,7 +75,8 @@ class Cylinder:
     y_mm: float
     radius_mm: float
     height_mm: float
-    rgb: tuple[int, int, int] = OBSTACLE_RGB
+    rgb: tuple[int, int, int] | None = None
+    name: str | None = None
 
 
 @dataclass(frozen=True)
@@ -458,7 +459,7 @@ def _array(c, data, key) -> list[dict]:
 def _obstacles(c, data, size):
     w = c.where
     out = []
-    allowed = {"shape", "x_mm", "y_mm", "size_mm", "heading_deg", "radius_mm", "height_mm", "colour"}
+    allowed = {"name", "shape", "x_mm", "y_mm", "size_mm", "heading_deg", "radius_mm", "height_mm", "colour"}
     for i, entry in enumerate(_array(c, data, "obstacles")):
         tp = ("obstacles",)
         k = f"obstacles[{i + 1}]."
@@ -467,20 +468,26 @@ def _obstacles(c, data, size):
         x = c.number(entry.get("x_mm"), k + "x_mm", w.of(tp, i, "x_mm"))
         y = c.number(entry.get("y_mm"), k + "y_mm", w.of(tp, i, "y_mm"))
         c.inside_mat(x, y, size, k + "x_mm", w.of(tp, i, "x_mm"))
-        rgb = OBSTACLE_RGB
+        rgb = None
         if "colour" in entry:
             got = c.colour(entry["colour"], k + "colour", w.of(tp, i, "colour"))
             rgb = got[0] if got else rgb
+        name = entry.get("name")
+        if name is not None and (not isinstance(name, str) or not re.fullmatch(r"[A-Za-z0-9_\-]+", name)):
+            c.problem(
+                w.of(tp, i, "name"), k + "name", f"give a name of letters, digits, _ or -, not {name!r}"
+            )
+            name = None
         if shape == "box":
             dims = c.numbers(entry.get("size_mm"), 3, k + "size_mm", w.of(tp, i, "size_mm"), positive=True)
             heading = c.number(entry.get("heading_deg", 0.0), k + "heading_deg", w.of(tp, i, "heading_deg"))
             if None not in (x, y, dims, heading):
-                out.append(Box(x, y, dims, heading, rgb))
+                out.append(Box(x, y, dims, heading, rgb, name))
         elif shape == "cylinder":
             r = c.number(entry.get("radius_mm"), k + "radius_mm", w.of(tp, i, "radius_mm"), positive=True)
             h = c.number(entry.get("height_mm"), k + "height_mm", w.of(tp, i, "height_mm"), positive=True)
             if None not in (x, y, r, h):
-                out.append(Cylinder(x, y, r, h, rgb))
+                out.append(Cylinder(x, y, r, h, rgb, name))
         else:
             c.problem(w.of(tp, i, "shape"), k + "shape", f'give "box" or "cylinder", not {shape!r}')
     return out

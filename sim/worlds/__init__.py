@@ -1,18 +1,19 @@
-"""The simulator's worlds: built by code from shipped files, never downloaded.
+"""The simulator's worlds: built from shipped files, never downloaded.
 
-`--world` takes an alias from WORLDS or a path to an MJCF file. A world
-builder returns a fresh MjSpec of the scene (floor, mat, walls, props) with
-no robot; the chassis is spliced in afterwards at the start pose the world
-suggests (or the one the user gives).
+`--world` takes an alias from WORLDS, a world file (.toml beside its mat image; the built-in
+worlds are such files in builtin/) or a path to an MJCF file. A world builder returns a fresh
+MjSpec of the scene (floor, mat, walls, props) with no robot; the chassis is spliced in
+afterwards at the start pose the world suggests (or the one the user gives).
 """
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
+from pathlib import Path
 
 import mujoco
 
 from ..job import UnknownWorldError, world_file
-from ..world_file import WorldSpec, open_world
+from ..world_file import WorldSpec, load, open_world
 from . import arena, empty, line_track, wro, zones
 from .scoring import FinalState, Scoring, final_state
 
@@ -41,36 +42,28 @@ def from_spec(spec: WorldSpec) -> World:
     )
 
 
+BUILTIN = Path(__file__).parent / "builtin"
+
+
+def _builtin(alias: str, score: Scoring) -> World:
+    """A shipped world: its world file and mat image in builtin/, scored by its own module (the
+    measures these missions report, progress along a route or the gap to a wall, are more than a
+    world file's zone rules express)."""
+    world = from_spec(load(BUILTIN / f"{alias}.toml"))
+    return replace(world, alias=alias, score=score)
+
+
 WORLDS: dict[str, World] = {
     "empty": World("empty", "a flat floor, nothing else", empty.build),
-    "line_track": World(
-        "line_track",
-        "a 20 mm black line on a 2000 x 1200 mm mat: bends, a junction and a finish bar",
-        line_track.build,
-        line_track.START_MM_DEG,
-        line_track.score,
-    ),
-    "zones": World(
-        "zones",
-        "coloured zones and a skewed black align line on a 1500 x 1000 mm mat",
-        zones.build,
-        zones.START_MM_DEG,
-        zones.score,
-    ),
-    "arena": World(
-        "arena",
-        "a 1600 x 1000 mm arena walled in 100 mm high, with a pillar: for the distance sensors",
-        arena.build,
-        arena.START_MM_DEG,
-        arena.score,
-    ),
-    "wro": World(
-        "wro",
-        "a WRO-size 2362 x 1143 mm competition table: printed mat, walls, 12 blocks shuffled by the seed",
-        wro.build,
-        wro.START_MM_DEG,
-        wro.score,
-    ),
+    **{
+        alias: _builtin(alias, score)
+        for alias, score in (
+            ("line_track", line_track.score),
+            ("zones", zones.score),
+            ("arena", arena.score),
+            ("wro", wro.score),
+        )
+    },
 }
 
 __all__ = ["WORLDS", "FinalState", "Scoring", "UnknownWorldError", "World", "final_state", "resolve"]

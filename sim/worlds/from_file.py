@@ -21,7 +21,7 @@ from .mat_image import load_mat
 from .props import PropKind, add_prop, prop_name
 from .scene import new_scene
 from .scoring import FinalState
-from .table import MM, add_border, add_floor, add_mat, add_wall
+from .table import MM, WALL_RGBA, add_border, add_floor, add_mat, add_wall
 
 _PROP_BODY = re.compile(r"^prop_\d+_(.+)$")
 
@@ -84,12 +84,13 @@ def build_scene(spec: WorldSpec, seed: int) -> mujoco.MjSpec:
 
 def _add_obstacle(scene, spec: WorldSpec, index: int, obstacle: Box | Cylinder) -> None:
     x, y = spec.to_centre(obstacle.x_mm, obstacle.y_mm)
-    rgba = [c / 255 for c in obstacle.rgb] + [1.0]
+    rgba = list(WALL_RGBA) if obstacle.rgb is None else [c / 255 for c in obstacle.rgb] + [1.0]
+    name = obstacle.name or f"obstacle_{index:02d}"
     if isinstance(obstacle, Box):
         if obstacle.heading_deg == 0.0:
             add_wall(
                 scene,
-                f"obstacle_{index:02d}",
+                name,
                 x,
                 y,
                 obstacle.size_mm[0],
@@ -101,7 +102,7 @@ def _add_obstacle(scene, spec: WorldSpec, index: int, obstacle: Box | Cylinder) 
         yaw = math.radians(obstacle.heading_deg)
         sx, sy, sz = obstacle.size_mm
         scene.worldbody.add_geom(
-            name=f"obstacle_{index:02d}",
+            name=name,
             type=mujoco.mjtGeom.mjGEOM_BOX,
             size=[sx / 2 * MM, sy / 2 * MM, sz / 2 * MM],
             pos=[x * MM, y * MM, sz / 2 * MM],
@@ -110,7 +111,7 @@ def _add_obstacle(scene, spec: WorldSpec, index: int, obstacle: Box | Cylinder) 
         )
     else:
         scene.worldbody.add_geom(
-            name=f"obstacle_{index:02d}",
+            name=name,
             type=mujoco.mjtGeom.mjGEOM_CYLINDER,
             size=[obstacle.radius_mm * MM, obstacle.height_mm / 2 * MM, 0.0],
             pos=[x * MM, y * MM, obstacle.height_mm / 2 * MM],

@@ -8,23 +8,17 @@ it, while a right-edge follower would take it, the classic junction choice.
 The finish bar is wider than the QTR window, so the whole window going dark
 is the stop signal, as the manual's followers use it.
 
-The robot starts on the line at the start straight, facing along it, its QTR
-bar (70 mm ahead of the axle) already over the line.
+The world itself is builtin/line_track.toml and its mat image, drawn from route() by
+builtin/draw_mats.py; this module keeps the route, which scores a run.
 """
 
-import mujoco
-
-from .canvas import BLACK, WHITE, MatCanvas
 from .path import Path
-from .scene import new_scene
 from .scoring import FinalState
-from .table import add_floor, add_mat
 
 MAT_MM = (2000.0, 1200.0)
 LINE_WIDTH_MM = 20.0
 FINISH_BAR_MM = (160.0, 40.0)  # across the line, along the line
 BRANCH_MM = 180.0
-START_MM_DEG = (-850.0, -400.0, 0.0)
 # The finish counts when the robot stops with its axle within this much of the bar's near edge
 # (a QTR bar 70 mm ahead of the axle over the bar puts the axle about 70 mm short of it).
 FINISH_WINDOW_MM = 150.0
@@ -43,25 +37,6 @@ def route() -> tuple[Path, tuple[float, float]]:
     path.arc(250.0, 90.0)  # right bend, heading down the mat
     path.straight(350.0)  # home straight into the finish bar
     return path, junction
-
-
-def draw(px_per_mm: float = 1.0) -> MatCanvas:
-    canvas = MatCanvas(*MAT_MM, px_per_mm=px_per_mm, background=WHITE)
-    path, (jx, jy) = route()
-    canvas.stroke_path(path.points(), LINE_WIDTH_MM, BLACK)
-    canvas.stroke_path([(jx, jy), (jx, jy - BRANCH_MM)], LINE_WIDTH_MM, BLACK)  # branch to the right
-    across, along = FINISH_BAR_MM
-    ex, ey = path.x_mm, path.y_mm  # the home straight runs toward -y
-    canvas.fill_rect(ex - across / 2, ey, ex + across / 2, ey - along, BLACK)
-    return canvas
-
-
-def build(seed: int = 0) -> mujoco.MjSpec:
-    """The track has nothing to randomise: every seed gives the same world."""
-    spec = new_scene("line_track")
-    add_floor(spec)
-    add_mat(spec, draw())
-    return spec
 
 
 def score(state: FinalState) -> dict:

@@ -24,9 +24,6 @@ class PropKind:
     friction: float  # sliding coefficient against the mat
 
 
-# A LEGO-built game element about the size WRO uses: 50 mm cube, 50 g.
-BLOCK = PropKind(size_mm=(50.0, 50.0, 50.0), mass_kg=0.05, friction=0.5)
-
 
 def prop_name(index: int, label: str) -> str:
     return f"{PROP_PREFIX}{index:02d}_{label}"

@@ -10,8 +10,6 @@ leaves the mat sees bare floor instead of mat texture.
 
 import mujoco
 
-from .canvas import MatCanvas
-
 MM = 0.001
 MAT_GEOM_PREFIX = "mat"
 FLOOR_GEOM = "floor"
@@ -32,8 +30,9 @@ def add_floor(spec: mujoco.MjSpec, half_size_m: float = 5.0) -> None:
     )
 
 
-def add_mat(spec: mujoco.MjSpec, canvas: MatCanvas, name: str = MAT_GEOM_PREFIX, x_mm=0.0, y_mm=0.0):
-    """Lay `canvas` flat with its centre at (x_mm, y_mm); returns the geom."""
+def add_mat(spec: mujoco.MjSpec, canvas, name: str = MAT_GEOM_PREFIX, x_mm=0.0, y_mm=0.0):
+    """Lay `canvas` (an RGB raster: pixels, width_px/height_px, width_mm/height_mm, as from_file's
+    MatRaster) flat with its centre at (x_mm, y_mm); returns the geom."""
     texture = spec.add_texture(
         name=f"{name}_texture",
         type=mujoco.mjtTexture.mjTEXTURE_2D,

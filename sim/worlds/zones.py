@@ -4,18 +4,16 @@ The robot starts at the left facing +x. Straight ahead, past a slightly skewed
 black line (the square-up exercise for the QTR bar or two colour sensors),
 lies the red zone, flanked by green and blue; yellow and black sit midfield
 above and below the robot's path. Scoring names the zone the robot's centre
-ends in.
+ends in. The world is builtin/zones.toml and its mat image, drawn from ZONES by
+builtin/draw_mats.py.
 """
 
-import mujoco
-
-from .canvas import BLACK, BLUE, GREEN, RED, WHITE, YELLOW, MatCanvas
-from .scene import new_scene
+from ..world_file import PALETTE
 from .scoring import FinalState
-from .table import add_floor, add_mat
+
+BLACK, BLUE, GREEN, RED, YELLOW = (PALETTE[c] for c in ("black", "blue", "green", "red", "yellow"))
 
 MAT_MM = (1500.0, 1000.0)
-START_MM_DEG = (-500.0, 0.0, 0.0)
 
 # name -> (x0, y0, x1, y1, colour), mat millimetres.
 ZONES = {
@@ -30,22 +28,6 @@ ZONES = {
 # yellow and black zones so that every band on the mat is one colour.
 ALIGN_LINE_MM = ((-203.0, -230.0), (-157.0, 230.0))
 ALIGN_LINE_WIDTH_MM = 25.0
-
-
-def draw(px_per_mm: float = 1.0) -> MatCanvas:
-    canvas = MatCanvas(*MAT_MM, px_per_mm=px_per_mm, background=WHITE)
-    for x0, y0, x1, y1, rgb in ZONES.values():
-        canvas.fill_rect(x0, y0, x1, y1, rgb)
-    canvas.stroke_path(ALIGN_LINE_MM, ALIGN_LINE_WIDTH_MM, BLACK)
-    return canvas
-
-
-def build(seed: int = 0) -> mujoco.MjSpec:
-    """A fixed layout: every seed gives the same mat."""
-    spec = new_scene("zones")
-    add_floor(spec)
-    add_mat(spec, draw())
-    return spec
 
 
 def zone_at(x_mm: float, y_mm: float) -> str | None:

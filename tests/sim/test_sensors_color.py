@@ -9,7 +9,7 @@ from openbricks_sim.sensors.color import TCS34725Model
 from openbricks_sim.sensors.mat import GroundProbe
 from openbricks_sim.sensors.mux import TCA9548AModel
 from openbricks_sim.sensors.registers import physics_clock_us
-from openbricks_sim.worlds import line_track, zones
+from openbricks_sim.worlds import WORLDS, zones
 
 from .placed import place, step_ms
 
@@ -71,7 +71,7 @@ def test_white_mat_fills_most_of_the_range_at_the_driver_defaults_and_black_line
     full_scale = 1024  # one 2.4 ms cycle
     white = read_after_integration("zones", -500, 0)[0]
     # The line track's start line runs under the robot's centre line; color_0 is 20 mm left of it.
-    x, y, _ = line_track.START_MM_DEG
+    x, y, _ = WORLDS["line_track"].start_mm_deg
     on_line = read_after_integration("line_track", x, y - 20)[0]
     assert 0.75 * full_scale < white < 0.95 * full_scale
     assert on_line < 0.05 * full_scale

@@ -7,7 +7,7 @@ import pytest
 
 from openbricks_sim.shim import Shim
 from openbricks_sim.simulation import Simulation
-from openbricks_sim.worlds import arena, line_track
+from openbricks_sim.worlds import WORLDS, arena
 
 SITE_AHEAD_MM = 95.0  # the chassis' distance site
 
@@ -50,14 +50,14 @@ def test_tcs34725_driver_behind_the_mux_names_the_colours_under_each_sensor(hub)
     assert right.ambient() < left.ambient()
 
 
-@at("line_track", line_track.START_MM_DEG[0], line_track.START_MM_DEG[1] - 20.0)
+@at("line_track", WORLDS["line_track"].start_mm_deg[0], WORLDS["line_track"].start_mm_deg[1] - 20.0)
 def test_tcs34725_over_the_black_line_reads_dark(hub):
     left, right = colour_sensors()  # the left sensor (20 mm left of centre) sits on the line
     assert left.ambient() < 8
     assert right.ambient() > 75
 
 
-@at("line_track", *line_track.START_MM_DEG)
+@at("line_track", *WORLDS["line_track"].start_mm_deg)
 def test_qtr_line_sensor_calibrates_on_a_sweep_and_sees_the_line_centred(hub):
     import time
 

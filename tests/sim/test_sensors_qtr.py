@@ -6,11 +6,11 @@ import pytest
 from openbricks_sim.sensors.mat import GroundProbe
 from openbricks_sim.sensors.qtr import POSITIONS_MM, QTRBarModel
 from openbricks_sim.sensors.registers import physics_clock_us
-from openbricks_sim.worlds import line_track
+from openbricks_sim.worlds import WORLDS, line_track
 
 from .placed import place, step_ms
 
-START_X, START_Y, _ = line_track.START_MM_DEG  # the start line runs along y = START_Y, heading 0
+START_X, START_Y, _ = WORLDS["line_track"].start_mm_deg  # the start line runs along y = START_Y, heading 0
 
 
 def bar(alias, x_mm, y_mm, heading_deg=0.0, **kw):

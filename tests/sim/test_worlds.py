@@ -14,6 +14,7 @@ from openbricks_sim.worlds import (
     UnknownWorldError,
     arena,
     final_state,
+    from_file,
     line_track,
     resolve,
     wro,
@@ -102,9 +103,10 @@ def prop_layout(model):
 
 
 def test_wro_seed_gives_a_reproducible_layout_of_twelve_blocks():
-    first = prop_layout(wro.build(7).compile())
-    again = prop_layout(wro.build(7).compile())
-    other = prop_layout(wro.build(8).compile())
+    build = WORLDS["wro"].build
+    first = prop_layout(build(7).compile())
+    again = prop_layout(build(7).compile())
+    other = prop_layout(build(8).compile())
     assert len(first) == 12
     assert first == again
     assert first != other
@@ -113,19 +115,22 @@ def test_wro_seed_gives_a_reproducible_layout_of_twelve_blocks():
 
 
 def test_wro_blocks_stay_on_their_slots_whatever_the_seed():
-    slots = np.array(wro.slots_mm())
+    spec = WORLDS["wro"].spec
+    slots = np.array([spec.to_centre(*p) for p in spec.slots["table"].positions])
+    jitter = spec.slots["table"].jitter_mm
     for seed in range(5):
-        for x, y in prop_layout(wro.build(seed).compile()).values():
-            assert np.min(np.hypot(slots[:, 0] - x, slots[:, 1] - y)) <= wro.SLOT_JITTER_MM * math.sqrt(2)
+        for x, y in prop_layout(WORLDS["wro"].build(seed).compile()).values():
+            assert np.min(np.hypot(slots[:, 0] - x, slots[:, 1] - y)) <= jitter * math.sqrt(2)
 
 
 def test_wro_blocks_have_mass_and_move_when_the_robot_drives_into_one():
     # Put the robot just behind a block and push it with a plain speed loop on both wheels.
-    layout = wro.layout(0)
+    spec = WORLDS["wro"].spec
+    layout = [(p.colour, *spec.to_centre(x, y), -h) for p, x, y, h in from_file.layout(spec, 0)]
     colour, bx, by, _ = layout[0]
     model, data = compile_world("wro", pose=(bx - 140.0, by, 0.0))
     block = model.body(f"prop_00_{colour}")
-    assert model.body_mass[block.id] == pytest.approx(wro.BLOCK.mass_kg)
+    assert model.body_mass[block.id] == pytest.approx(0.05)  # a 50 g LEGO-built element
     wheels = [model.joint(name).dofadr[0] for name in ("left_wheel", "right_wheel")]
     for _ in range(800):  # about 150 mm of travel: the block moves, but not into its neighbour
         data.ctrl[:] = 0.3 * (math.radians(300) - data.qvel[wheels])
@@ -163,18 +168,18 @@ def test_line_track_scores_a_stop_at_the_finish_bar_and_not_a_stop_short_or_past
     assert at_bar["finished"] and at_bar["progress_pct"] > 95
     assert not line_track.score(FinalState(robot=Pose(ex, ey + 400, 90)))["finished"]
     assert not line_track.score(FinalState(robot=Pose(ex, ey - 200, 90)))["finished"]
-    start = line_track.score(FinalState(robot=Pose(*line_track.START_MM_DEG)))
+    start = line_track.score(FinalState(robot=Pose(*WORLDS["line_track"].start_mm_deg)))
     assert not start["finished"] and start["progress_mm"] == pytest.approx(50.0, abs=1.0)
 
 
 def test_zones_score_names_the_zone_under_the_robot():
     assert zones.score(FinalState(robot=Pose(500, 0, 0))) == {"zone": "red"}
     assert zones.score(FinalState(robot=Pose(500, 300, 0))) == {"zone": "green"}
-    assert zones.score(FinalState(robot=Pose(*zones.START_MM_DEG))) == {"zone": None}
+    assert zones.score(FinalState(robot=Pose(*WORLDS["zones"].start_mm_deg))) == {"zone": None}
 
 
 def test_arena_score_measures_the_gap_to_the_walls():
-    start = arena.score(FinalState(robot=Pose(*arena.START_MM_DEG)))
+    start = arena.score(FinalState(robot=Pose(*WORLDS["arena"].start_mm_deg)))
     assert start == {"nearest_wall_mm": 300.0, "ahead_mm": 1300.0}
     facing_pillar = arena.score(FinalState(robot=Pose(300, -200, -90)))  # heading -90: facing +y
     assert facing_pillar["ahead_mm"] == pytest.approx(350.0)
@@ -188,3 +193,21 @@ def test_resolve_takes_an_alias_or_an_mjcf_file_and_names_the_choices_otherwise(
     assert model.geom("ground").type == mujoco.mjtGeom.mjGEOM_PLANE
     with pytest.raises(UnknownWorldError, match="line_track"):
         resolve("linetrack")
+
+
+def test_the_arena_scores_the_faces_its_world_file_builds():
+    model, _ = compile_world("arena")
+    pillar = model.geom("pillar")
+    px, py, side = arena.PILLAR_MM
+    assert tuple(np.round(pillar.pos[:2] * 1000, 3)) == (px, py)
+    assert tuple(np.round(pillar.size[:2] * 2000, 3)) == (side, side)
+    east = model.geom("wall_east")
+    assert (east.pos[0] - east.size[0]) * 1000 == pytest.approx(arena.INNER_MM[0] / 2)
+
+
+def test_the_builtin_mats_are_the_images_their_script_draws():
+    from openbricks_sim.worlds.builtin import draw_mats
+
+    for alias, draw in draw_mats.MATS.items():
+        model, _ = compile_world(alias)
+        assert np.array_equal(mat_texture(model), draw().pixels), alias

@@ -1,4 +1,4 @@
-"""A printed mat drawn by code: an RGB raster addressed in millimetres.
+"""A printed mat drawn by code, for the built-in mats' images: an RGB raster addressed in millimetres.
 
 The raster is laid out the way MuJoCo maps a 2D texture onto a plane with
 texrepeat 1 1: row 0 is the mat's far edge (+y), column 0 its left edge
@@ -15,14 +15,17 @@ whole-texel steps. Every primitive touches only its own bounding box.
 
 import numpy as np
 
-# Print colours (sRGB) chosen to read as their names under the colour sensor model.
-WHITE = (246, 246, 242)
-BLACK = (22, 22, 24)
-RED = (205, 35, 45)
-GREEN = (30, 150, 70)
-BLUE = (30, 85, 195)
-YELLOW = (245, 205, 35)
-GREY = (150, 150, 150)
+from ...world_file import PALETTE
+
+# Print colours (sRGB) chosen to read as their names under the colour sensor model: the palette a
+# world file's colour names mean.
+WHITE = PALETTE["white"]
+BLACK = PALETTE["black"]
+RED = PALETTE["red"]
+GREEN = PALETTE["green"]
+BLUE = PALETTE["blue"]
+YELLOW = PALETTE["yellow"]
+GREY = PALETTE["grey"]
 
 
 class MatCanvas:
