@@ -13,6 +13,7 @@ new interpreter otherwise.
 
 from __future__ import annotations
 
+import fcntl
 import io
 import os
 import select
@@ -26,7 +27,16 @@ from collections.abc import Callable
 
 # The dispositions a fresh interpreter starts with: whatever the parent installed (a CLI forwarding
 # Ctrl-C, a server's shutdown handler) must not run in the child.
-_FRESH_SIGNALS = {signal.SIGTERM: signal.SIG_DFL, signal.SIGHUP: signal.SIG_DFL}
+_FRESH_SIGNALS = {
+    signal.SIGTERM: signal.SIG_DFL,
+    signal.SIGHUP: signal.SIG_DFL,
+    signal.SIGCHLD: signal.SIG_DFL,
+}
+_HIGH_FD = 100  # where descriptors wait while the child's 0, 1, 2, 3, ... are laid out
+
+
+class ForkServerError(RuntimeError):
+    """A fork server (fork_server.py) is gone or refused a request: its requester starts the child cold."""
 
 
 def can_fork() -> bool:
@@ -99,13 +109,14 @@ def fork_child(
     stdin: int | None = None,
     stdout: int | None = None,
     stderr: int | None = None,
-    pass_fds: tuple[int, ...] = (),
-    close_fds: tuple[int, ...] = (),
+    extra_fds: tuple[int, ...] = (),
 ) -> ForkedChild:
     """Fork; the child runs main() in a session of its own and exits with its status, never returning.
 
-    stdin/stdout/stderr: descriptors to put in the child's 0/1/2 (None keeps the parent's); pass_fds
-    stay open in the child, close_fds (the parent's ends of its pipes) are closed there."""
+    stdin/stdout/stderr: descriptors to put in the child's 0/1/2 (None keeps the parent's); extra_fds
+    become the child's 3, 4, ... in order. Every other descriptor is closed in the child, as
+    subprocess closes them for a spawned one: a child holds nothing of its parent's (a server's
+    sockets, the other ends of its pipes)."""
     sys.stdout.flush()
     sys.stderr.flush()
     pid = os.fork()
@@ -114,18 +125,25 @@ def fork_child(
     status = 1
     try:
         os.setsid()
-        for target, fd in ((0, stdin), (1, stdout), (2, stderr)):
-            if fd is not None and fd != target:
-                os.dup2(fd, target)
+        signal.set_wakeup_fd(-1)
+        # Out of the way first, so that moving one onto 3, 4, ... cannot overwrite another.
+        moved = [
+            fcntl.fcntl(fd, fcntl.F_DUPFD_CLOEXEC, _HIGH_FD)
+            for fd in (stdin, stdout, stderr, *extra_fds)
+            if fd is not None
+        ]
+        for target, fd in enumerate((stdin, stdout, stderr)):
+            if fd is not None:
+                os.dup2(moved.pop(0), target)
+        for target, fd in enumerate(moved, start=3):
+            os.dup2(fd, target)  # dup2 leaves the copy inheritable, as the child's own descriptor
+        os.closerange(3 + len(extra_fds), _max_fd())
         # Python's streams onto the descriptors, as a new interpreter's are (the parent may have put
         # its own objects there: a test's capture, a console's wrapper).
         if stdout is not None:
             sys.stdout = _text_stream(1, sys.__stdout__)
         if stderr is not None:
             sys.stderr = _text_stream(2, sys.__stderr__)
-        for fd in close_fds:
-            if fd not in pass_fds:
-                os.close(fd)
         signal.signal(signal.SIGINT, signal.default_int_handler)
         for signum, disposition in _FRESH_SIGNALS.items():
             signal.signal(signum, disposition)
@@ -136,6 +154,13 @@ def fork_child(
             sys.stderr.flush()
         finally:
             os._exit(status)
+
+
+def _max_fd() -> int:
+    try:
+        return os.sysconf("SC_OPEN_MAX")
+    except (ValueError, OSError):
+        return 65536
 
 
 def _text_stream(fd: int, like):

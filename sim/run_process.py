@@ -29,7 +29,7 @@ import sys
 import threading
 import time
 
-from .forked import can_fork, fork_child
+from .forked import ForkServerError, can_fork, fork_child
 from .job import CPU_LIMIT, ERROR, EXIT_STATUS, INSTALL_HINT, STOPPED, WALL_LIMIT, SimJob, SimResult
 
 GRACE_S = 10.0  # start-up (imports, the world's build) plus the child's own wall-limit handling
@@ -54,7 +54,9 @@ def child_main(child_args: list[str]) -> int:
     return main(child_args)
 
 
-def run_in_child(job: SimJob, viewer=False, silent=False, quiet=False, stop=None) -> tuple[SimResult, int]:
+def run_in_child(
+    job: SimJob, viewer=False, silent=False, quiet=False, stop=None, forker=None
+) -> tuple[SimResult, int]:
     """Run `job` in `python -m openbricks_sim.run --job JSON --result-fd N`; (its SimResult, exit status).
 
     viewer: serve the 3D view (the child runs until interrupted). By default the program's output
@@ -62,7 +64,8 @@ def run_in_child(job: SimJob, viewer=False, silent=False, quiet=False, stop=None
     neither (they are in the result: `sim run --json`); quiet: silent, and whatever else the child
     writes is discarded too (a sweep's hundred children on one terminal).
     Off the main thread (a sweep's worker) no signal is forwarded: Python handles signals only there;
-    setting `stop` (a threading.Event) stops the program instead, as a Ctrl-C would.
+    setting `stop` (a threading.Event) stops the program instead, as a Ctrl-C would. forker: a
+    fork_server.ForkServer to start the child from (a sweep's, warm), instead of a fork of this process.
     """
     wall_limit_s = job.wall_limit(watched=viewer)
     cpu_limit_s = job.cpu_limit(watched=viewer)
@@ -93,7 +96,7 @@ def run_in_child(job: SimJob, viewer=False, silent=False, quiet=False, stop=None
     killed_for_time = False
     try:
         try:
-            child = _start_child([*child_args, "--result-fd", str(write_end)], write_end, read_end, quiet)
+            child = _start_child(child_args, write_end, quiet, forker)
         finally:
             os.close(write_end)
         children.append(child)
@@ -120,24 +123,25 @@ def run_in_child(job: SimJob, viewer=False, silent=False, quiet=False, stop=None
     return result, EXIT_STATUS.get(result.exit, 1)
 
 
-def _start_child(child_args, write_end, read_end, quiet):
-    """The child, forked when that is safe (a ForkedChild), else a new interpreter (a Popen): the same
-    child_main() with no stdin, in a session of its own, the result pipe's write end its only extra."""
-    if can_fork():
+def _start_child(child_args, write_end, quiet, forker):
+    """The child: from `forker` (a warm ForkServer) if given, else a fork of this process when that is
+    safe, else a new interpreter; each runs child_main() with no stdin, in a session of its own, the
+    result pipe's write end its only descriptor beyond 0, 1 and 2 (its fd 3 when forked)."""
+    if forker is not None or can_fork():
         devnull = os.open(os.devnull, os.O_RDWR)
+        stdio = {"stdin": devnull, "stdout": devnull if quiet else None, "stderr": devnull if quiet else None}
+        args = [*child_args, "--result-fd", "3"]
         try:
-            return fork_child(
-                functools.partial(child_main, child_args),
-                stdin=devnull,
-                stdout=devnull if quiet else None,
-                stderr=devnull if quiet else None,
-                pass_fds=(write_end,),
-                close_fds=(read_end, devnull),
-            )
+            if forker is None:
+                return fork_child(functools.partial(child_main, args), **stdio, extra_fds=(write_end,))
+            try:
+                return forker.start("run", args, **stdio, pass_fds=(write_end,))
+            except ForkServerError:  # the server is gone: this child starts cold instead
+                pass
         finally:
             os.close(devnull)
     return subprocess.Popen(
-        [sys.executable, "-c", CHILD_MAIN, *child_args],
+        [sys.executable, "-c", CHILD_MAIN, *child_args, "--result-fd", str(write_end)],
         stdin=subprocess.DEVNULL,
         stdout=subprocess.DEVNULL if quiet else None,
         stderr=subprocess.DEVNULL if quiet else None,

@@ -25,6 +25,7 @@ from collections.abc import Iterable, Iterator
 from concurrent.futures import ThreadPoolExecutor, as_completed
 from dataclasses import dataclass, replace
 
+from .fork_server import ForkServer
 from .job import FINISHED, SimJob, SimResult
 
 MAX_SEEDS = 10_000  # a bigger range is almost certainly a typo (1-50000 for 1-500)
@@ -102,12 +103,13 @@ def parse_seeds(text: str) -> list[int]:
     return list(seeds)
 
 
-def run_seed(job: dict, source: str, stop=None) -> dict:
+def run_seed(job: dict, source: str, stop=None, forker=None) -> dict:
     """Run one job (a SimJob's dict) in a contained child process; its SimResult as a dict.
 
     Runs in the pool or on a Dask worker: the program's text is written to a temporary file there,
     so a worker on another machine needs no copy, and the result names the program as given.
     stop: a threading.Event that stops the run (the local pool's, when the sweep is abandoned).
+    forker: the local pool's warm fork server (fork_server.py), which the child is forked from.
     """
     from dataclasses import asdict
 
@@ -119,7 +121,9 @@ def run_seed(job: dict, source: str, stop=None) -> dict:
         program = os.path.join(folder, os.path.basename(sim_job.program))
         with open(program, "w", encoding="utf-8") as f:
             f.write(source)
-        result, _status = run_in_child(replace(sim_job, program=program), quiet=True, stop=stop)
+        result, _status = run_in_child(
+            replace(sim_job, program=program), quiet=True, stop=stop, forker=forker
+        )
     finally:
         shutil.rmtree(folder, ignore_errors=True)
     if result.job:
@@ -156,17 +160,21 @@ def sweep(
 
 
 def _on_pool(workers: int, jobs: dict, source: str) -> Iterator[SeedRow]:
-    """Threads that each mind one contained child at a time. Abandoned (Ctrl-C, a stopped job),
+    """Threads that each mind one contained child at a time, forked from one warm fork server (the
+    imports paid once, not once per seed) where the OS can fork. Abandoned (Ctrl-C, a stopped job),
     seeds not started are dropped and running ones stopped, so nothing outlives the sweep."""
     stop = threading.Event()
+    forker = ForkServer() if hasattr(os, "fork") else None
     pool = ThreadPoolExecutor(max_workers=workers, thread_name_prefix="sweep")
     try:
-        futures = {pool.submit(run_seed, job, source, stop): seed for seed, job in jobs.items()}
+        futures = {pool.submit(run_seed, job, source, stop, forker): seed for seed, job in jobs.items()}
         for future in as_completed(futures):
             yield SeedRow(futures[future], SimResult(**future.result()))
     finally:
         stop.set()
         pool.shutdown(wait=True, cancel_futures=True)
+        if forker is not None:
+            forker.close()
 
 
 def _on_dask(address: str, jobs: dict, source: str, template: SimJob) -> Iterator[SeedRow]:

@@ -15,7 +15,7 @@ pytestmark = pytest.mark.skipif(not hasattr(os, "fork"), reason="fork() is a POS
 
 def run(main, **fds):
     read_end, write_end = os.pipe()
-    child = fork_child(main, stdout=write_end, stderr=write_end, close_fds=(read_end,), **fds)
+    child = fork_child(main, stdout=write_end, stderr=write_end, **fds)
     os.close(write_end)
     with os.fdopen(read_end, "r") as pipe:
         text = pipe.read()
@@ -41,6 +41,24 @@ def test_the_child_runs_in_a_session_of_its_own_with_fresh_signal_handlers():
         assert run(main) == (0, "True True\n")
     finally:
         signal.signal(signal.SIGTERM, previous)
+
+
+def test_extra_descriptors_are_the_childs_3_4_and_nothing_else_is_open():
+    spare_read, spare_write = os.pipe()  # the parent's: the child must not hold it
+    first_read, first_write = os.pipe()
+
+    def main():
+        os.write(3, b"on three")
+        print(sorted(int(fd) for fd in os.listdir("/proc/self/fd") if int(fd) > 2))
+
+    try:
+        status, text = run(main, extra_fds=(first_write,))
+        os.close(first_write)
+        assert os.read(first_read, 100) == b"on three"
+        assert status == 0 and text.strip() in ("[3]", "[3, 4]")  # 4: listdir's own descriptor
+    finally:
+        for fd in (spare_read, spare_write, first_read):
+            os.close(fd)
 
 
 def test_wait_times_out_and_kill_ends_the_child():
