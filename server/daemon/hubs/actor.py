@@ -696,7 +696,12 @@ class HubActor:
 
         try:
             result = await self._repl.run(
-                path, on_output=parser.feed, on_link_event=link_event, timeout_s=RUN_TIMEOUT_S, watch=nonce
+                path,
+                name=program.filename,  # a source staged as /program.py: tracebacks name the program
+                on_output=parser.feed,
+                on_link_event=link_event,
+                timeout_s=RUN_TIMEOUT_S,
+                watch=nonce,
             )
         except LinkError as exc:
             parser.flush()

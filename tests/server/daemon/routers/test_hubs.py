@@ -222,3 +222,17 @@ def test_live_output_carries_the_hubs_stamp_and_history_shows_the_same(tmp_path,
             assert stored == samples
     finally:
         daemon.stop()
+
+
+def test_a_runtime_error_names_the_program_and_its_line_in_the_output_and_the_history(daemon2):
+    """A virtual hub stages the source at /program.py; its traceback still names the program's own file,
+    live and in the history, so the editor can mark the line."""
+    with daemon2.client() as api:
+        wait_idle(api, ["SimHub-1"])
+        api.put("/api/programs/divide.py", json={"source": "print('a')\nx = 1\nprint(x / 0)\n"})
+        run_id = api.post("/api/hubs/SimHub-1/run", json={"program": "divide.py"}).json()["run_id"]
+        run = wait_ended(api, run_id)
+        texts = [ln["text"] for ln in api.get(f"/api/runs/{run_id}/output").json()["lines"]]
+    assert run["outcome"] == "error"
+    assert '  File "divide.py", line 3, in <module>' in texts, texts
+    assert not any("/program.py" in t for t in texts)
