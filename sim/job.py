@@ -225,6 +225,8 @@ class SimResult:
     job: dict = field(default_factory=dict)
     score: dict | None = None  # the world's scoring hook on the final state; None: no mission
     build_s: float | None = None  # of wall_s, building the physics at the first hardware use; None: never
+    # The program's plot() samples, {"name", "value", "sim_ms"} each, in order; never in `output`.
+    telemetry: list = field(default_factory=list)
 
     def to_json(self) -> str:
         return json.dumps(asdict(self))
@@ -242,6 +244,7 @@ class SimResult:
             "real_time_factor": self.real_time_factor,
             "error": self.error,
             "output": self.output,
+            "telemetry": self.telemetry,
             "job": self.job,
         }
 

@@ -27,11 +27,14 @@ import importlib
 import io
 import json
 import os
+import secrets
 import signal
 import sys
 import threading
 import time
 from dataclasses import replace
+
+from openbricks.host_protocol import FRAME_PREFIX, parse_plot
 
 from . import limits
 from .clock import SimStopped, SimTimeLimit
@@ -65,20 +68,74 @@ from .simulation import Simulation
 
 
 class _Output(io.TextIOBase):
-    """Collects what the program prints, and passes each write on to `echo` (live output) if given."""
+    """Collects what the program prints, and passes each write on to `echo` (live output) if given.
 
-    def __init__(self, echo=None):
+    With `frame_start` (the run's own plot tag), a line that starts with it is a plot() frame: read with
+    the hub protocol's parse_plot, its sample joins `samples` at the simulated time `now_ms()` and is
+    echoed as a hub run without a console prints it (`plot: name = value`), but is not output. Text
+    that may still become a frame waits for its line's end; any other text passes at once.
+    """
+
+    def __init__(self, echo=None, frame_start=None, now_ms=None):
         self._parts = []
         self._echo = echo
+        self._frame = frame_start
+        self._now_ms = now_ms
+        self._line = ""  # the held start of a line that may be a frame
+        self._line_start = True
+        self.samples = []
 
     def writable(self):
         return True
 
     def write(self, text):
+        if self._frame is None:
+            self._pass(text)
+            return len(text)
+        rest = self._line + text
+        self._line = ""
+        while rest:
+            if not self._line_start:
+                end = rest.find("\n") + 1 or len(rest)
+                self._pass(rest[:end])
+                rest = rest[end:]
+                continue
+            end = rest.find("\n") + 1
+            if end == 0:
+                if self._frame.startswith(rest) or rest.startswith(self._frame):
+                    self._line = rest  # may be a frame: wait for the line's end
+                else:
+                    self._pass(rest)
+                break
+            self._take_line(rest[:end])
+            rest = rest[end:]
+        return len(text)
+
+    def _take_line(self, line):
+        parsed = None
+        if line.startswith(self._frame):
+            kind, _, payload = line[len(self._frame) :].partition(" ")
+            parsed = parse_plot(payload) if kind == "plot" else None
+        if parsed is None:
+            self._pass(line)
+            return
+        name, value = parsed
+        self.samples.append({"name": name, "value": value, "sim_ms": self._now_ms()})
+        if self._echo is not None:
+            shown = json.dumps(int(value) if value.is_integer() else value)  # as the console's CLI shows it
+            self._echo(f"plot: {name} = {shown}\n")
+
+    def _pass(self, text):
+        self._line_start = text.endswith("\n")
         self._parts.append(text)
         if self._echo is not None:
             self._echo(text)
-        return len(text)
+
+    def close_line(self):
+        """The run ended: a held line start is output after all."""
+        if self._line:
+            self._pass(self._line)
+            self._line = ""
 
     def text(self):
         return "".join(self._parts)
@@ -102,10 +159,15 @@ class ProgramRun:
         self, source, filename="main.py", wall_limit_s=None, echo=None, job=None, plot_tag=None
     ) -> SimResult:
         """`plot_tag`: the nonce of a console that watches the run, which then takes the program's
-        plot() frames for telemetry as it does a hub's; None: plot() prints `plot: name = value`."""
+        plot() frames for telemetry as it does a hub's; None: the run tags and reads them itself, into
+        the result's telemetry."""
         sim = self.simulation
         code = compile(source, filename, "exec")
-        output = _Output(echo)
+        if plot_tag is None:
+            plot_tag = secrets.token_hex(4)
+            output = _Output(echo, f"{FRAME_PREFIX}{plot_tag} ", sim.clock.now_ms)
+        else:
+            output = _Output(echo)
         watchdog = None
         if wall_limit_s is not None:
             watchdog = threading.Timer(wall_limit_s, self._wall_limit_reached)
@@ -123,8 +185,8 @@ class ProgramRun:
             ):
                 sim.on_build = functools.partial(_building, shim, sim.clock)
                 sys.stdout = sys.stderr = output
-                if plot_tag is not None:  # on the runtime the program imports (the shim's fresh one)
-                    importlib.import_module("openbricks.tools")._plot_tag[0] = plot_tag
+                # On the runtime the program imports (the shim's fresh one).
+                importlib.import_module("openbricks.tools")._plot_tag[0] = plot_tag
                 # What is built so far (the runtime's shim, MuJoCo if a caller built it) out of the
                 # collector's reach: each collection the program's allocations start no longer walks
                 # all of it again. The physics, built at the first hardware use, joins it then.
@@ -157,6 +219,7 @@ class ProgramRun:
                     sys.stdout, sys.stderr = saved_streams
         finally:
             sys.stdout, sys.stderr = saved_streams
+        output.close_line()
         wall_s = time.perf_counter() - started
         if exit_reason in LIMIT_MESSAGES:
             error = (error or "") + LIMIT_MESSAGES[exit_reason](wall_limit_s, sim.clock.now_ms()) + "\n"
@@ -170,6 +233,7 @@ class ProgramRun:
             pose=pose,
             build_s=sim.build_s,
             output=output.text(),
+            telemetry=output.samples,
             error=error,
             real_time_factor=round(sim_ms / 1000 / wall_s, 2) if wall_s > 0 else None,
             peak_rss_mb=_peak_rss_mb(),

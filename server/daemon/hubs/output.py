@@ -18,13 +18,12 @@ after a restart splits output and samples exactly as the live capture did.
 from __future__ import annotations
 
 import json
-import math
 import re
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
 
-from openbricks.host_protocol import FRAME_PREFIX
+from openbricks.host_protocol import FRAME_PREFIX, parse_plot
 from openbricks_server.daemon.hub_events import OutputLine, RunOutcome, TelemetrySample
 
 _HEADER = re.compile(r"^-- run_(\d+) --$")
@@ -40,18 +39,8 @@ def now_ms() -> int:
 
 def plot_sample(payload: str, hub_ms: int | None, recv_ms: int) -> TelemetrySample | None:
     """The sample in a plot frame's JSON, or None if it is not one (then the line stays output)."""
-    try:
-        data = json.loads(payload)
-    except ValueError:
-        return None
-    if not isinstance(data, dict):
-        return None
-    name, value = data.get("name"), data.get("value")
-    if not isinstance(name, str) or not name or isinstance(value, bool):
-        return None
-    if not isinstance(value, int | float) or not math.isfinite(value):
-        return None
-    return TelemetrySample(name, float(value), hub_ms, recv_ms)
+    parsed = parse_plot(payload)
+    return None if parsed is None else TelemetrySample(parsed[0], parsed[1], hub_ms, recv_ms)
 
 
 class OutputParser:
