@@ -88,3 +88,19 @@ def test_not_toml_missing_keys_and_a_bare_image_without_its_size(tmp_path):
     with pytest.raises(ValueError, match="WIDTHxHEIGHT"):
         mat_size_argument("2362 by 1143")
     assert mat_size_argument("2362x1143") == (2362.0, 1143.0)
+
+
+def test_the_manuals_example_world_file_reads_as_written(tmp_path):
+    from pathlib import Path
+
+    page = (Path(__file__).resolve().parents[2] / "docs" / "season-table.md").read_text()
+    example = page.split("```toml\n", 1)[1].split("```", 1)[0]
+    write_table(tmp_path)  # its mat.png
+    path = tmp_path / "season.toml"
+    path.write_text(example)
+    spec = load(path)
+    assert spec.name == "season 2026" and spec.obstacles[0].name == "tower"
+    assert [r.points for r in spec.rules] == [25, 5, -10]
+    from openbricks_sim.worlds import resolve
+
+    assert resolve(str(path)).build(3).compile().nbody == 4  # the world body and the three props
