@@ -297,6 +297,7 @@ export class ConsoleModel {
           const next = new Set(this.programNames);
           if (d.action === "deleted") next.delete(name);
           else next.add(name);
+          if (d.action === "renamed") next.delete(d.old_name as string);
           this.programNames = next;
         }
         break;

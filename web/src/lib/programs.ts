@@ -43,3 +43,36 @@ for i in range(5):
     print("tick", i)
     wait(200)
 `;
+
+/** Every stored version of a program, newest first (text left out; `loadVersion` reads one). */
+export async function listVersions(name: string): Promise<Program[]> {
+  return api.get<Program[]>(`/api/programs/${enc(name)}/versions`);
+}
+
+export async function loadVersion(name: string, version: number): Promise<Program> {
+  return api.get<Program>(`/api/programs/${enc(name)}/versions/${version}`);
+}
+
+/** An older version's text becomes the newest version again. */
+export async function restoreVersion(name: string, version: number): Promise<{ program: Program; created: boolean }> {
+  return api.post(`/api/programs/${enc(name)}/versions/${version}/restore`);
+}
+
+/** Refused with 409 `program_exists` when `newName` is taken. */
+export async function renameProgram(name: string, newName: string): Promise<Program> {
+  return api.post<Program>(`/api/programs/${enc(name)}/rename`, { new_name: newName });
+}
+
+export async function deleteProgram(name: string): Promise<void> {
+  return api.del(`/api/programs/${enc(name)}`);
+}
+
+/** A file's text stored as a program: refused with 409 `program_exists` unless `replace`. */
+export async function importProgram(name: string, source: string, replace = false): Promise<{ program: Program; created: boolean }> {
+  return api.post(`/api/programs`, { name, source, replace });
+}
+
+/** The link that downloads a program's stored text as a .py file. */
+export function downloadPath(name: string): string {
+  return `api/programs/${enc(name)}/download`;
+}
