@@ -141,6 +141,7 @@ ROUTERS = [
     system.router,
     auth_router.router,
     programs.router,
+    programs.drafts_router,
     runtime.router,
     examples_router.router,
     runs.router,

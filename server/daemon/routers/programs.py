@@ -1,7 +1,11 @@
 """Stored programs with their version history: `PUT` saves a new version (after the checks of
 `openbricks_server.daemon.programs`), older versions stay readable and can be restored. Programs are
 renamed, deleted, imported from a file (`POST /programs`, never overwriting unless asked) and
-downloaded as `.py` files."""
+downloaded as `.py` files.
+
+The editor keeps what is being typed as a draft (`PUT /programs/{name}/draft`, a second or so after the
+last key): unchecked text, one per name, there for a new program before its first save, so a page
+switch, a reload or another computer finds the edit again. Saving the program clears its draft."""
 
 from __future__ import annotations
 
@@ -16,6 +20,7 @@ from openbricks_server.daemon.errors import ApiError
 from openbricks_server.daemon.programs import check_name, check_source
 
 router = APIRouter(prefix="/programs", tags=["programs"], dependencies=[Depends(require_viewer)])
+drafts_router = APIRouter(prefix="/drafts", tags=["programs"], dependencies=[Depends(require_viewer)])
 
 ProgramName = Path(description="1-64 letters, digits, '_', '.', '-'; e.g. square.py", max_length=200)
 
@@ -45,6 +50,28 @@ class ProgramImport(BaseModel):
 
 class Rename(BaseModel):
     new_name: str = Field(max_length=200, description="the program's new name, e.g. square_v2.py")
+
+
+# A draft is kept even past what a hub would take (saving it says so): losing typing is worse.
+DRAFT_MAX_CHARS = 1_000_000
+
+
+class DraftText(BaseModel):
+    source: str = Field(max_length=DRAFT_MAX_CHARS, description="the editor's text as it is now")
+    base_version: int | None = Field(
+        None, ge=1, le=2**31, description="the stored version the edit started from; null for a new program"
+    )
+
+
+class DraftInfo(BaseModel):
+    name: str
+    base_version: int | None
+    who: str | None  # the token label that typed it
+    updated_ms: int
+
+
+class Draft(DraftInfo):
+    source: str
 
 
 class Saved(BaseModel):
@@ -91,8 +118,41 @@ async def save_program(
     name: str = ProgramName,
     caller: Caller = Depends(require_operator),
 ) -> Saved:
-    """Store the text as the program's newest version (checked first: name, size, text, syntax)."""
-    return await _save(request, check_name(name), body.source, caller.label, "saved")
+    """Store the text as the program's newest version (checked first: name, size, text, syntax); the
+    program's draft, now saved, is cleared."""
+    saved = await _save(request, check_name(name), body.source, caller.label, "saved")
+    request.app.state.ctx.store.drafts.delete(name)
+    return saved
+
+
+@router.get("/{name}/draft", response_model=Draft)
+async def get_draft(request: Request, name: str = ProgramName) -> Draft:
+    """The program's unsaved edit, if the editor left one (404 `not_found` when there is none)."""
+    found = request.app.state.ctx.store.drafts.get(check_name(name))
+    if found is None:
+        raise ApiError.not_found(f"a draft of {name!r}", "the stored program is GET /api/programs/{name}")
+    return Draft(**found)
+
+
+@router.put("/{name}/draft", response_model=Draft)
+async def put_draft(
+    body: DraftText, request: Request, name: str = ProgramName, caller: Caller = Depends(require_operator)
+) -> Draft:
+    """Keep the editor's text as the program's draft (not checked, not a version; the newest one wins)."""
+    drafts = request.app.state.ctx.store.drafts
+    return Draft(**drafts.put(check_name(name), body.source, body.base_version, caller.label))
+
+
+@router.delete("/{name}/draft", status_code=204, dependencies=[Depends(require_operator)])
+async def discard_draft(request: Request, name: str = ProgramName) -> None:
+    """Throw the unsaved edit away (nothing to throw away is fine too)."""
+    request.app.state.ctx.store.drafts.delete(check_name(name))
+
+
+@drafts_router.get("", response_model=list[DraftInfo])
+async def list_drafts(request: Request) -> list[DraftInfo]:
+    """Every program name with an unsaved edit (text left out), a new program's too."""
+    return [DraftInfo(**d) for d in request.app.state.ctx.store.drafts.list()]
 
 
 async def _save(request: Request, name: str, source: str, who: str, action: str) -> Saved:
@@ -157,6 +217,7 @@ async def rename_program(
             raise _exists(new)
         if outcome == "missing":
             raise ApiError.not_found(f"program {old!r}", "GET /api/programs lists the stored programs")
+        ctx.store.drafts.rename(old, new)
         ctx.events.publish("program", {"action": "renamed", "name": new, "old_name": old})
     info = {k: v for k, v in _program(request, new, None).items() if k != "source"}
     return ProgramVersionInfo(**info)
@@ -178,6 +239,7 @@ async def restore_version(
 async def delete_program(request: Request, name: str = ProgramName) -> None:
     """Delete the program with all its versions (runs keep the exact source they ran)."""
     ctx = request.app.state.ctx
+    ctx.store.drafts.delete(check_name(name))
     if not ctx.store.programs.delete(check_name(name)):
         raise ApiError.not_found(f"program {name!r}", "GET /api/programs lists the stored programs")
     ctx.events.publish("program", {"action": "deleted", "name": name})

@@ -177,4 +177,16 @@ MIGRATIONS: list[str] = [
         updated_ms INTEGER NOT NULL
     );
     """,
+    # 5: the editor's drafts: a program's unsaved text, kept as it is typed so a page switch, a reload or
+    # a closed laptop loses nothing. Keyed by name, not program_id: a new program has a draft before its
+    # first version. `base_version` is the version the edit started from (NULL for a new program).
+    """
+    CREATE TABLE drafts (
+        name TEXT PRIMARY KEY,
+        source TEXT NOT NULL,
+        base_version INTEGER,
+        who TEXT,
+        updated_ms INTEGER NOT NULL
+    );
+    """,
 ]

@@ -90,3 +90,49 @@ class Programs:
     def delete(self, name: str) -> bool:
         with self.db.transaction() as conn:
             return conn.execute("DELETE FROM programs WHERE name=?", (name,)).rowcount > 0
+
+
+_DRAFT_COLUMNS = "name, source, base_version, who, updated_ms"
+
+
+class Drafts:
+    """The editor's unsaved text per program name, written as it is typed; saving the program clears it.
+
+    A draft is not a version: it is never checked, never run, and one per name (the newest typing wins).
+    """
+
+    def __init__(self, db: Database):
+        self.db = db
+
+    def put(self, name: str, source: str, base_version: int | None, who: str | None) -> dict:
+        stamp = now_ms()
+        with self.db.transaction() as conn:
+            conn.execute(
+                "INSERT INTO drafts (name, source, base_version, who, updated_ms) VALUES (?,?,?,?,?) "
+                "ON CONFLICT (name) DO UPDATE SET source=excluded.source, "
+                "base_version=excluded.base_version, who=excluded.who, updated_ms=excluded.updated_ms",
+                (name, source, base_version, who, stamp),
+            )
+        return {"name": name, "source": source, "base_version": base_version, "who": who, "updated_ms": stamp}
+
+    def get(self, name: str) -> dict | None:
+        row = self.db.query_one(f"SELECT {_DRAFT_COLUMNS} FROM drafts WHERE name=?", (name,))
+        return dict(row) if row else None
+
+    def list(self) -> list[dict]:
+        """Every draft without its text, by name."""
+        return [
+            dict(r)
+            for r in self.db.query("SELECT name, base_version, who, updated_ms FROM drafts ORDER BY name")
+        ]
+
+    def delete(self, name: str) -> bool:
+        with self.db.transaction() as conn:
+            return conn.execute("DELETE FROM drafts WHERE name=?", (name,)).rowcount > 0
+
+    def rename(self, name: str, new_name: str) -> None:
+        """A renamed program keeps its draft (one already under `new_name` gives way)."""
+        with self.db.transaction() as conn:
+            if conn.execute("SELECT 1 FROM drafts WHERE name=?", (name,)).fetchone():
+                conn.execute("DELETE FROM drafts WHERE name=?", (new_name,))
+                conn.execute("UPDATE drafts SET name=? WHERE name=?", (new_name, name))

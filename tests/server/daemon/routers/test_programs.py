@@ -137,3 +137,42 @@ def test_a_viewer_reads_and_downloads_but_changes_nothing(operator, viewer):
     ]
     assert [r.status_code for r in refused] == [403] * 4
     assert [p["name"] for p in operator.get("/api/programs").json()] == ["mine.py"]
+
+
+def test_a_draft_is_kept_as_typed_and_saving_the_program_clears_it(operator):
+    """The editor's unsaved text: unchecked (half-typed code is fine), one per name, there for a new
+    program before its first save, moved by a rename, cleared by a save and a delete."""
+    assert operator.get("/api/programs/new.py/draft").json()["error"] == "not_found"
+    typed = operator.put("/api/programs/new.py/draft", json={"source": "while True\n"})
+    assert typed.status_code == 200, typed.text
+    assert typed.json()["base_version"] is None and typed.json()["who"] == "local"
+    again = operator.put("/api/programs/new.py/draft", json={"source": "while True:\n    pass\n"}).json()
+    assert operator.get("/api/programs/new.py/draft").json()["source"] == "while True:\n    pass\n"
+    assert operator.get("/api/drafts").json() == [{k: v for k, v in again.items() if k != "source"}]
+    assert operator.get("/api/programs").json() == []  # a draft is not a program
+    operator.put("/api/programs/new.py", json={"source": "pass\n"})
+    assert operator.get("/api/programs/new.py/draft").status_code == 404
+    operator.put("/api/programs/new.py/draft", json={"source": "x = 1\n", "base_version": 1})
+    operator.post("/api/programs/new.py/rename", json={"new_name": "old.py"})
+    moved = operator.get("/api/programs/old.py/draft").json()
+    assert (moved["source"], moved["base_version"]) == ("x = 1\n", 1)
+    assert operator.delete("/api/programs/old.py/draft").status_code == 204
+    assert operator.delete("/api/programs/old.py/draft").status_code == 204  # nothing left is fine
+    operator.put("/api/programs/old.py/draft", json={"source": "y = 2\n"})
+    operator.delete("/api/programs/old.py")
+    assert operator.get("/api/drafts").json() == []
+
+
+def test_a_draft_refuses_bad_names_and_versions_and_a_viewer_cannot_write_one(operator, viewer):
+    assert operator.put("/api/programs/..%2Fx/draft", json={"source": ""}).status_code in (400, 404, 422)
+    bad = operator.put("/api/programs/a%20b.py/draft", json={"source": ""})
+    assert bad.json()["error"] == "bad_program_name"
+    assert operator.put("/api/programs/a.py/draft", json={"source": "", "base_version": 0}).status_code == 422
+    operator.put("/api/programs/a.py/draft", json={"source": "mine\n"})
+    refused = [
+        viewer.put("/api/programs/a.py/draft", json={"source": "theirs\n"}),
+        viewer.delete("/api/programs/a.py/draft"),
+    ]
+    assert [r.status_code for r in refused] == [403, 403]
+    assert viewer.get("/api/programs/a.py/draft").json()["source"] == "mine\n"
+    assert [d["name"] for d in viewer.get("/api/drafts").json()] == ["a.py"]

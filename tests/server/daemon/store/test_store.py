@@ -160,3 +160,19 @@ def test_export_as_text_json_and_zip(store):
     archive = zipfile.ZipFile(io.BytesIO(runs_zip(store.runs, [run])))
     assert sorted(archive.namelist()) == ["01A0000000000000000000000A.json", "01A0000000000000000000000A.txt"]
     assert json.loads(archive.read("01A0000000000000000000000A.json"))["outcome"] == "finished"
+
+
+def test_drafts_are_one_per_name_and_survive_a_reopen(tmp_path):
+    first = Store(tmp_path / "db.sqlite3")
+    first.drafts.put("square.py", "a", None, "local")
+    first.drafts.put("square.py", "ab", 2, "local")
+    first.close()
+    again = Store(tmp_path / "db.sqlite3")
+    kept = again.drafts.get("square.py")
+    assert (kept["source"], kept["base_version"]) == ("ab", 2)
+    again.drafts.put("other.py", "c", None, None)
+    again.drafts.rename("square.py", "other.py")  # the renamed program's draft wins
+    assert [d["name"] for d in again.drafts.list()] == ["other.py"]
+    assert again.drafts.get("other.py")["source"] == "ab"
+    assert again.drafts.delete("other.py") and not again.drafts.delete("other.py")
+    again.close()
