@@ -210,8 +210,21 @@ def _origin_problem(origin: str | None, host: str | None, caller: Caller) -> tup
     return None
 
 
+def _wants_page(scope: Scope) -> bool:
+    """A browser opening a page (not a script, not the page's own API calls): it gets a page to read."""
+    if scope.get("method") not in ("GET", "HEAD") or scope["path"].startswith(("/api/", "/openapi")):
+        return False
+    accept = HTTPConnection(scope).headers.get("accept", "")
+    return "text/html" in accept
+
+
 async def _refuse(scope: Scope, send: Send, status: int, body: ErrorBody) -> None:
     if scope["type"] == "http":
+        if _wants_page(scope):
+            from openbricks_server.daemon.routers.pages import refusal_page  # the pages' look lives there
+
+            await refusal_page(status, body.message, body.hint or "")(scope, _no_receive, send)
+            return
         response = error_response(status, body)
         await response(scope, _no_receive, send)
         return

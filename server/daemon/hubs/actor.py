@@ -86,6 +86,7 @@ CAPABILITY_KEYS = (
     "log_slots",
     "log_max_bytes",
     "protocol",
+    "battery_mv",  # reported by hubs that measure their supply; the dashboard's tile shows it
 )
 
 

@@ -29,6 +29,22 @@ _PAGE = """<!doctype html>
 """
 
 
+def refusal_page(status: int, message: str, hint: str) -> HTMLResponse:
+    """A refused sign-in as a browser shows it: what happened and what to do, not the API's JSON."""
+    body = (
+        f"<p><b>{escape(message[:1].upper() + message[1:])}.</b></p>"
+        f"<p>{escape(hint[:1].upper() + hint[1:])}.</p>"
+        "<p>The address to open is the one <code>openbricks console</code> printed in its terminal when it "
+        "started (it ends in <code>/?token=...</code>). A teammate's or mentor's link comes from the "
+        "console's Share page.</p>"
+    )
+    return HTMLResponse(
+        _PAGE.format(body=body, version=escape(__version__)),
+        status_code=status,
+        headers={"cache-control": "no-store"},
+    )
+
+
 @router.get("/", response_class=HTMLResponse)
 async def landing(request: Request):
     caller = request.scope.get("state", {}).get("caller")

@@ -48,6 +48,18 @@ def test_without_a_token_only_the_sign_in_page_answers(daemon):
         assert anonymous.get("/api/runs", headers={"Authorization": "Bearer nope"}).status_code == 401
 
 
+def test_a_browser_with_a_bad_token_gets_a_page_to_read_not_json(daemon):
+    """A student opening an old link sees what happened and what to do; scripts keep the JSON."""
+    html = {"Accept": "text/html,application/xhtml+xml,*/*;q=0.8"}
+    with httpx.Client(base_url=daemon.url, headers=html) as browser:
+        wrong = browser.get("/?token=expired-or-mistyped", follow_redirects=False)
+        assert wrong.status_code == 401 and wrong.headers["content-type"].startswith("text/html")
+        assert "The token in this URL is not valid" in wrong.text and "/?token=" in wrong.text
+        assert '"error"' not in wrong.text
+        # The page's own API calls (and scripts) still get the one error shape.
+        assert browser.get("/api/runs").json()["error"] == "unauthorized"
+
+
 def test_bearer_tokens_work_for_scripts(daemon, viewer):
     assert viewer.get("/api/auth/me").json() == {"label": "mentor", "role": "viewer", "via": "bearer"}
 

@@ -6,6 +6,7 @@
 
 import { api, type Competition, type Hub } from "./api";
 import { consoleModel as model } from "./console.svelte";
+import { type StopAllResult, stopAllSummary } from "./words";
 
 const enc = encodeURIComponent;
 
@@ -15,27 +16,11 @@ function refusedFor(kind: "mutate" | "upload"): boolean {
   return reason !== null;
 }
 
-/** One hub's answer to stop-all. */
-export interface StopAllResult {
-  hub: string;
-  name: string;
-  stopped: boolean;
-  detail?: string | null;
-}
-
 export async function stopAll(): Promise<void> {
   if (refusedFor("mutate")) return;
   try {
-    const results = (await api.post<{ hubs: StopAllResult[] }>("/api/hubs/stop-all")).hubs;
-    const stopped = results.filter((x) => x.stopped).map((x) => x.name);
-    const idle = results.filter((x) => !x.stopped && x.detail === "nothing was running").map((x) => x.name);
-    const failed = results.filter((x) => !x.stopped && x.detail !== "nothing was running");
-    const parts = [
-      stopped.length ? `stopped ${stopped.join(", ")}` : "",
-      idle.length ? `nothing running on ${idle.join(", ")}` : "",
-      failed.length ? `not stopped: ${failed.map((f) => `${f.name} (${f.detail ?? "no answer"})`).join(", ")}` : "",
-    ].filter(Boolean);
-    model.notify(failed.length ? "error" : "info", `STOP ALL: ${parts.join("; ") || "no hubs"}.`);
+    const summary = stopAllSummary((await api.post<{ hubs: StopAllResult[] }>("/api/hubs/stop-all")).hubs);
+    model.notify(summary.kind, summary.message);
   } catch (err) {
     model.fail(err, "STOP ALL");
   }
@@ -50,12 +35,14 @@ export async function stop(hubId: string): Promise<void> {
   }
 }
 
-export async function hubAction(hubId: string, action: "identify" | "connect" | "disconnect"): Promise<void> {
-  if (refusedFor("mutate")) return;
+/** Identify, connect or disconnect one hub; the daemon's answer, or null when it was refused or failed. */
+export async function hubAction(hubId: string, action: "identify" | "connect" | "disconnect"): Promise<Record<string, unknown> | null> {
+  if (refusedFor("mutate")) return null;
   try {
-    await api.post(`/api/hubs/${enc(hubId)}/${action}`);
+    return (await api.post<Record<string, unknown>>(`/api/hubs/${enc(hubId)}/${action}`)) ?? {};
   } catch (err) {
     model.fail(err, `${action[0].toUpperCase()}${action.slice(1)} ${hubName(hubId)}`);
+    return null;
   }
 }
 

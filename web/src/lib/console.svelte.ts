@@ -9,6 +9,7 @@ import { ApiError, api, type Competition, type Hub, type Me, type OutputLine, ty
 import type { Envelope, Refetch, StreamState } from "./events";
 import { HubOutput } from "./output";
 import { RunTelemetry } from "./telemetry";
+import { plainError } from "./words";
 
 export interface Notice {
   id: number;
@@ -78,9 +79,19 @@ export class ConsoleModel {
 
   constructor(private readonly fetchLines = fetchRunLines) {}
 
+  /**
+   * Whether the event stream is lost: what the page shows is the last it heard, and nothing it sends
+   * would be seen through. The first connect ("connecting") is not a loss.
+   */
+  connectionLost = $derived(this.stream === "reconnecting" || this.stream === "refused");
+
   /** Why a mutating control is disabled right now, or null when it may be used. */
   readOnlyReason = $derived(
-    this.me === null
+    this.connectionLost
+      ? this.stream === "refused"
+        ? "This page is signed out of the console: open the address the console printed."
+        : "The console is not reachable: waiting for it to come back."
+      : this.me === null
       ? "Waiting for the console to say who you are."
       : this.me.role === "viewer"
         ? "Viewer role: read-only. Open the console with an operator token to change anything."
@@ -159,8 +170,12 @@ export class ConsoleModel {
 
   /** Show a failed call the way the daemon explained it. */
   fail(err: unknown, what: string): void {
-    if (err instanceof ApiError) this.notify("error", `${what}: ${err.message}`, err.hint);
-    else this.notify("error", `${what}: ${String(err)}`);
+    // The banner already says the console is unreachable: no toast per failed call on top of it.
+    if (err instanceof ApiError && err.status === 0 && this.connectionLost) return;
+    if (err instanceof ApiError) {
+      const said = plainError(err);
+      this.notify("error", `${what}: ${said.message}`, said.hint);
+    } else this.notify("error", `${what}: ${String(err)}`);
   }
 
   setHubs(list: Hub[]): void {
@@ -282,7 +297,8 @@ export class ConsoleModel {
           this.runs[run].outcome = outcome;
         }
         const hubId = e.hub ?? this.runs[run]?.hub_id;
-        const detail = d.detail ? `: ${d.detail as string}` : "";
+        // A detail that only repeats the outcome ("stopped: stopped") says nothing more.
+        const detail = d.detail && d.detail !== outcome ? `: ${d.detail as string}` : "";
         const kind = outcome === "error" || outcome === "dropped" ? "error" : "note";
         if (hubId) {
           this.lastOutcome[hubId] = outcome;

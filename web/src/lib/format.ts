@@ -46,3 +46,19 @@ export function download(name: string, text: string, type = "text/plain"): void 
   a.remove();
   setTimeout(() => URL.revokeObjectURL(url), 1000);
 }
+
+/** Link quality in words from the RSSI the daemon reads (BLE hubs); null when the hub reports none. */
+export function linkWords(rssi: number | null): string | null {
+  if (rssi === null) return null;
+  return ["weak", "weak", "fair", "good", "strong"][rssiBars(rssi)];
+}
+
+/**
+ * A hub's supply voltage as the tile shows it (`battery_mv` in what the hub reports on connect), or null
+ * when the hub does not measure it.
+ */
+export function batteryVolts(capabilities: Record<string, unknown> | null | undefined): string | null {
+  const mv = capabilities?.battery_mv;
+  if (typeof mv !== "number" || !Number.isFinite(mv) || mv <= 0) return null;
+  return `${(mv / 1000).toFixed(2)} V`;
+}
