@@ -15,6 +15,7 @@ from openbricks_server.daemon.auth import Caller, require_operator, require_view
 from openbricks_server.daemon.competition import unlocked
 from openbricks_server.daemon.errors import ApiError
 from openbricks_server.daemon.programs import check_name
+from openbricks_server.daemon.sim.worlds import MAX_UPLOAD_BYTES, WorldStore, WorldUploadError
 from openbricks_sim.job import CHASSIS_NAMES, WORLD_NAMES
 
 router = APIRouter(prefix="/sim", tags=["sim"], dependencies=[Depends(require_viewer)])
@@ -36,7 +37,9 @@ class StartPose(BaseModel):
 class SimRunRequest(BaseModel):
     program: str = Field(min_length=1, max_length=200, description="a stored program's name, e.g. square.py")
     version: int | None = Field(None, ge=1, description="the stored version (default: the newest)")
-    world: str = Field("empty", max_length=200, description=f"one of: {', '.join(WORLDS)}")
+    world: str = Field(
+        "empty", max_length=200, description=f"one of: {', '.join(WORLDS)}, or an uploaded world's name"
+    )
     chassis: Chassis | None = Field(None, description="default: the build whose motors the program makes")
     seed: int = Field(0, ge=0, le=2**31 - 1)
     start: StartPose | None = Field(None, description="default: the world's start")
@@ -110,6 +113,32 @@ class SimRun(BaseModel):
 
 class World(BaseModel):
     name: str
+    description: str = ""
+    uploaded: bool = False  # a team's world (POST /api/sim/worlds), not a built-in one
+    size_mm: list[float] | None = None
+    props: int | None = None
+    zones: int | None = None
+
+
+def world_store(request: Request) -> WorldStore:
+    return WorldStore(request.app.state.ctx.config.resolved_data_dir / "worlds")
+
+
+def resolve_world(request: Request, name: str) -> str:
+    """What a run's child builds for a world name: a built-in alias as it is, an uploaded world's name
+    as its world file's path. Refuses any other name with the list of worlds."""
+    if name in WORLDS:
+        return name
+    path = world_store(request).path(name)
+    if path is None:
+        uploaded = [w["name"] for w in world_store(request).list()]
+        raise ApiError.invalid(
+            "unknown_world",
+            f"unknown world {name!r}",
+            f"use one of: {', '.join([*WORLDS, *uploaded])} (GET /api/sim/worlds), or upload yours "
+            "(POST /api/sim/worlds)",
+        )
+    return str(path)
 
 
 def _jobs(request: Request):
@@ -152,21 +181,55 @@ def _live(request: Request, run_id: str, action: str):
 
 
 @router.get("/worlds", response_model=list[World])
-async def list_worlds() -> list[World]:
-    """The worlds a sim run can use."""
-    return [World(name=name) for name in WORLDS]
+async def list_worlds(request: Request) -> list[World]:
+    """The worlds a sim run can use: the built-in ones, then those uploaded to this console."""
+    return [World(name=name) for name in WORLDS] + [World(**w) for w in world_store(request).list()]
+
+
+@router.post(
+    "/worlds",
+    response_model=World,
+    status_code=201,
+    openapi_extra={
+        "requestBody": {
+            "required": True,
+            "content": {"application/octet-stream": {"schema": {"type": "string", "format": "binary"}}},
+        }
+    },
+)
+async def upload_world(request: Request, _caller: Caller = Depends(require_operator)) -> World:
+    """Upload a world: the request body is a zip of its world file (.toml) and the mat image it names.
+    It is checked whole (422 `bad_world` lists every problem of the file, each with its line) and kept
+    in the console's data folder under the world's name, replacing an older upload of that name."""
+    data = bytearray()
+    async for chunk in request.stream():
+        data += chunk
+        if len(data) > MAX_UPLOAD_BYTES:
+            raise ApiError(
+                413,
+                "too_large",
+                f"the world is larger than {MAX_UPLOAD_BYTES // 2**20} MB",
+                "shrink the mat image",
+            )
+    if not data:
+        raise ApiError.invalid("empty", "the request body is empty: send a zip of the world file and its mat")
+    try:
+        saved = world_store(request).save_zip(bytes(data))
+    except WorldUploadError as exc:
+        raise ApiError.invalid(
+            "bad_world",
+            "; ".join(exc.problems),
+            "fix the world file (the manual's \"Your season's table\" page) and upload it again",
+            detail={"problems": exc.problems},
+        ) from None
+    return World(**saved)
 
 
 @router.post("/runs", response_model=SimRun, status_code=201)
 async def start_run(request: Request, body: SimRunRequest, caller: Caller = START_ALLOWED) -> SimRun:
     """Start a stored program in the simulator: a child process with time and memory limits, its 3D
     view at `view_url`, its output and telemetry on the event stream."""
-    if body.world not in WORLDS:
-        raise ApiError.invalid(
-            "unknown_world",
-            f"unknown world {body.world!r}",
-            f"use one of: {', '.join(WORLDS)} (GET /api/sim/worlds)",
-        )
+    world = resolve_world(request, body.world)
     ctx = request.app.state.ctx
     name = check_name(body.program)
     found = ctx.store.programs.version(name, body.version)
@@ -186,7 +249,7 @@ async def start_run(request: Request, body: SimRunRequest, caller: Caller = STAR
         run_id = await jobs.start(
             program_name=found["name"],
             source=found["source"],
-            world=body.world,
+            world=world,
             chassis=body.chassis,
             seed=body.seed,
             start_mm_deg=None if start is None else [start.x_mm, start.y_mm, start.heading_deg],
@@ -198,6 +261,8 @@ async def start_run(request: Request, body: SimRunRequest, caller: Caller = STAR
         )
     except OSError as exc:
         raise ApiError(500, "sim_start_failed", f"the simulator could not be started: {exc}") from None
+    if world != body.world:  # an uploaded world: the history names it, not its file's path
+        ctx.store.sim_runs.update(run_id, world=body.world)
     return _view(request, run_id)
 
 

@@ -13,7 +13,7 @@ from openbricks_server.daemon.competition import unlocked
 from openbricks_server.daemon.errors import ApiError
 from openbricks_server.daemon.programs import check_name
 from openbricks_server.daemon.routers.jobs import JobOut, JobRef, WaitQuery, find_job, registry
-from openbricks_server.daemon.routers.sim import WORLDS, Chassis
+from openbricks_server.daemon.routers.sim import WORLDS, Chassis, resolve_world
 from openbricks_server.daemon.sim.sweeps import KIND, rows_csv
 from openbricks_sim.job import JobError, SimJob
 from openbricks_sim.sweep import SweepError, parse_seeds
@@ -27,7 +27,9 @@ START_ALLOWED = Depends(unlocked("start a sweep"))  # operators, unless competit
 class SweepRequest(BaseModel):
     program: str = Field(min_length=1, max_length=200, description="a stored program's name, e.g. square.py")
     version: int | None = Field(None, ge=1, description="the stored version (default: the newest)")
-    world: str = Field("empty", max_length=200, description=f"one of: {', '.join(WORLDS)}")
+    world: str = Field(
+        "empty", max_length=200, description=f"one of: {', '.join(WORLDS)}, or an uploaded world's name"
+    )
     chassis: Chassis | None = Field(None, description="default: the build whose motors the program makes")
     seeds: str = Field(
         min_length=1, max_length=200, description="a range (1-50), one seed (3) or a list (1,4,9), as the CLI"
@@ -53,10 +55,7 @@ def _sweeps(request: Request):
 async def start_sweep(request: Request, body: SweepRequest, caller: Caller = START_ALLOWED) -> JobOut:
     """Start the sweep and answer at once with its job; `GET /api/sim/sweeps/{job}?wait_s=` waits for
     the rows. Every seed runs as `sim run` runs it: its own child process, with its limits."""
-    if body.world not in WORLDS:
-        raise ApiError.invalid(
-            "unknown_world", f"unknown world {body.world!r}", f"use one of: {', '.join(WORLDS)}"
-        )
+    world = resolve_world(request, body.world)
     if body.workers is not None and body.dask is not None:
         raise ApiError.invalid(
             "bad_sweep", "give workers or dask, not both", "workers is for the local pool only"
@@ -77,7 +76,7 @@ async def start_sweep(request: Request, body: SweepRequest, caller: Caller = STA
     try:
         template = SimJob(
             found["name"],
-            world=body.world,
+            world=world,
             chassis=body.chassis,
             limit_ms=body.limit_ms,
             memory_mb=body.memory_mb,
