@@ -32,8 +32,9 @@ import socket
 import subprocess
 import sys
 import threading
+import time
 
-from .forked import ForkServerError, fork_child
+from .forked import ForkServerError, can_fork, fork_child
 
 # What a child may run: name -> "module:function(args) -> exit status".
 TARGETS = {
@@ -71,6 +72,7 @@ def serve(control_fd: int) -> int:
             importlib.import_module(name)
         except Exception:  # noqa: BLE001 - a MuJoCo that does not load, a broken world file: each
             pass  # child meets it again and reports it as its result
+    _warm_up()
     gc.collect()
     gc.freeze()
     control = socket.socket(fileno=control_fd)
@@ -105,6 +107,28 @@ def serve(control_fd: int) -> int:
     return 0
 
 
+def _warm_up() -> None:
+    """Show a robot in a 3D view once and close it: what the first view of a process pays (viser's
+    and rich's own lazy imports, mjviser's mesh and type-hint caches) is then paid here, not by each
+    child. The view's threads end before the first fork, which needs this process alone on one."""
+    try:
+        from .simulation import Simulation
+        from .viewer import SimViewer
+
+        simulation = Simulation()
+        try:
+            with SimViewer(port=0, controls=False, record=True) as viewer:
+                viewer.attach(simulation)
+                viewer.detach(None)
+        finally:
+            simulation.close()
+    except Exception:  # noqa: BLE001 - a warm-up that fails leaves the children to pay for themselves
+        pass
+    deadline = time.monotonic() + 10
+    while threading.active_count() > 1 and time.monotonic() < deadline:
+        time.sleep(0.01)
+
+
 def _fork_request(message: bytes, fds: list[int]):
     """Fork the child a request asks for; (its pid, the reply socket), or (None, None) if refused."""
     reply = socket.socket(fileno=fds[0]) if fds else None
@@ -113,6 +137,8 @@ def _fork_request(message: bytes, fds: list[int]):
         request = json.loads(message)
         target = TARGETS[request["target"]]
         stdin, stdout, stderr, *keep = passed
+        if not can_fork():  # a thread of the warm-up that never ended: a fork could deadlock
+            raise ForkServerError(f"the fork server runs {threading.active_count()} threads")
         pid = fork_child(
             functools.partial(_run_target, target, list(request["args"]), request.get("cwd")),
             stdin=stdin,
@@ -120,7 +146,7 @@ def _fork_request(message: bytes, fds: list[int]):
             stderr=stderr,
             extra_fds=tuple(keep),
         ).pid
-    except (ValueError, KeyError, TypeError) as exc:
+    except (ValueError, KeyError, TypeError, ForkServerError) as exc:
         if reply is not None:
             _send(reply, {"error": f"bad request: {exc}"})
             reply.close()

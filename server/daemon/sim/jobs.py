@@ -1,7 +1,9 @@
 """Sim runs as daemon jobs: one child process each, steered over its stdin, heard over its stdout.
 
 User code never runs in the daemon. A run's child (`openbricks_sim.console_job`) fences itself in
-(memory, CPU time, no new processes), serves the run's 3D view on 127.0.0.1 and records it. This side:
+(memory, CPU time, no new processes), serves the run's 3D view on 127.0.0.1 and records it. It is
+forked by the daemon's warm fork server (warm.py), so its imports are already done; spawned cold
+where that cannot be. This side:
 
 - starts it in a session of its own with the program's stored text written into the run's directory
   under the data dir (`sim/RUN_ID/`), where the recording and the child's own log land too;
@@ -34,6 +36,7 @@ from pathlib import Path
 from openbricks_server.daemon.hub_events import OutputLine, RunStart, TelemetrySample
 from openbricks_server.daemon.hubs.output import OutputParser
 from openbricks_server.daemon.sim.proxy import ViewRelay, http_client
+from openbricks_server.daemon.sim.warm import WarmServer
 from openbricks_server.daemon.store import now_ms
 from openbricks_sim.console_job import CHILD_MAIN
 from openbricks_sim.job import SimJob
@@ -98,7 +101,13 @@ class SimRunJob:
         }
         spec_path.write_text(json.dumps(spec), encoding="utf-8")
         with open(self.run_dir / "child.log", "wb") as child_log:
-            self._process = await asyncio.create_subprocess_exec(
+            self._process = await self.jobs.warm.start(
+                "console_job",
+                [str(spec_path)],
+                cwd=str(self.run_dir),
+                stderr=child_log.fileno(),
+                limit=EVENT_LINE_LIMIT,
+            ) or await asyncio.create_subprocess_exec(
                 sys.executable,
                 "-c",
                 CHILD_MAIN,
@@ -317,6 +326,7 @@ class SimJobs:
         self.live: dict[str, SimRunJob] = {}
         self.max_live = MAX_LIVE_RUNS
         self.http = http_client()  # the live views' pages are fetched through this
+        self.warm = WarmServer()  # forks each run's child, MuJoCo and the 3D view already imported
 
     async def start(
         self,
@@ -411,4 +421,5 @@ class SimJobs:
         live = list(self.live.values())
         if live:
             await asyncio.gather(*(job.stop() for job in live), return_exceptions=True)
+        await self.warm.close()
         await self.http.aclose()
