@@ -67,10 +67,19 @@ class Console:
         raise AssertionError(f"{count} hubs did not become idle within {timeout_s} s: {hubs}")
 
 
-def start_console(data_dir: Path, virtual: int = 2, extra: list[str] | None = None) -> Console:
+def start_console(
+    data_dir: Path, virtual: int = 2, extra: list[str] | None = None, port: int | None = None
+) -> Console:
+    """`port`: the one to listen on (a restart where the page left off), else a free one."""
     assert pages.INDEX.is_file(), "the console page is not built: run `make web` (make test does)"
-    port = free_port()
-    env = {**os.environ, "PYTHONUNBUFFERED": "1", "XDG_RUNTIME_DIR": str(data_dir / "run")}
+    port = port or free_port()
+    # Its own hub locks and virtual-hub folder too: consoles of tests running side by side never meet.
+    env = {
+        **os.environ,
+        "PYTHONUNBUFFERED": "1",
+        "XDG_RUNTIME_DIR": str(data_dir / "run"),
+        "OPENBRICKS_DATA_DIR": str(data_dir / "state"),
+    }
     (data_dir / "run").mkdir(parents=True, exist_ok=True)
     log = open(data_dir / "console.log", "w")  # noqa: SIM115 - closed with the process
     process = subprocess.Popen(
