@@ -258,6 +258,7 @@ PAGES = [
     ("flash", "Flash"),
     ("servo", "Servo-ID"),
     ("audit", "Audit"),
+    ("share", "Share"),
 ]
 
 
@@ -405,7 +406,7 @@ def test_competition_mode_locks_uploads_while_a_run_is_on_and_keys_work(console,
 
 
 def _competition_mode_locks_uploads(console, page_for, page, name, other):
-    page.check("header .comp input")
+    page.check("[data-testid=competition] input[type=checkbox]")  # beside the match timer, on the Dashboard
     page.get_by_role("button", name="Start match").click()
     timer = page.locator("[data-testid=match-timer]")
     first = timer.inner_text()
@@ -416,7 +417,8 @@ def _competition_mode_locks_uploads(console, page_for, page, name, other):
         assert api.get("/api/competition").json()["on"] is True
     judge = page_for(console.sign_in_url(console.mint("viewer")))
     judge.locator("[data-testid=match-timer]").wait_for()
-    assert judge.is_disabled("header .comp input") and judge.is_checked("header .comp input")
+    switch = "[data-testid=competition] input[type=checkbox]"
+    assert judge.is_disabled(switch) and judge.is_checked(switch)
     mine, theirs = timer.inner_text(), judge.locator("[data-testid=match-timer]").inner_text()
     to_s = lambda clock: int(clock.split(":")[0]) * 60 + int(clock.split(":")[1])  # noqa: E731
     assert abs(to_s(mine) - to_s(theirs)) <= 1, (mine, theirs)
@@ -461,7 +463,7 @@ def test_identify_from_a_tile_is_in_the_audit_log(console, page_for):
         "button", name="Identify"
     ).click()
     page.goto(page.url.split("#")[0] + "#/audit")
-    row = page.locator("[data-testid=audit] tr", has_text="identify")
+    row = page.locator("[data-testid=audit] tr", has_text=f"Identified {hub['name']}")
     row.first.wait_for()
     assert "done" in row.first.inner_text()
     screenshot(page, "audit")
