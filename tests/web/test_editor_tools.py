@@ -114,10 +114,11 @@ def test_completion_versions_file_operations_and_the_repl_in_the_page(console, p
     output = page.locator("[data-testid=repl-output]")
     output.wait_for()
     assert output.inner_text() == "2"
-    page.fill("[data-testid=repl-input]", "x = 6 * 7")
-    page.press("[data-testid=repl-input]", "Enter")
-    page.fill("[data-testid=repl-input]", "x")
-    page.press("[data-testid=repl-input]", "Enter")
+    for entry in ("x = 6 * 7", "x"):  # an entry waits for the one before it to be answered
+        page.locator("[data-testid=repl][data-pending=false]").wait_for()
+        page.fill("[data-testid=repl-input]", entry)
+        page.press("[data-testid=repl-input]", "Enter")
+    page.locator("[data-testid=repl][data-pending=false]").wait_for()
     wait_for(lambda: output.count() == 2, what="the second value")
     assert output.nth(1).inner_text() == "42"
     screenshot(page, "editor-repl")
