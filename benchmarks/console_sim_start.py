@@ -5,8 +5,9 @@ line prints and whose second drives, and the output of the run is read back thro
 2 ms) until that line is there: what a browser waiting on the Run button sees, the child's start
 included. The run's children come from the daemon's warm fork server (server/daemon/sim/warm.py);
 for comparison the same is measured with every child spawned cold, a new interpreter importing
-MuJoCo and the 3D view itself, as before the fork server. ROUNDS runs each, alternating, after one
-warm-up run that waits for the fork server's own imports; medians kept.
+MuJoCo and the 3D view itself, as before the fork server (and as the daemon's first sim run still
+is: it starts the fork server). ROUNDS runs each, alternating, after a run that waits for the fork
+server's own imports; medians kept.
 """
 
 from __future__ import annotations
@@ -61,7 +62,8 @@ def run() -> list[Row]:
             with httpx.Client(base_url=daemon.url, headers=headers, timeout=60) as client:
                 client.put("/api/programs/start.py", json={"source": PROGRAM}).raise_for_status()
                 warm_server = daemon.app.state.ctx.sim.warm
-                first_s = _first_output_s(client)  # waits for the fork server's own imports
+                first_s = _first_output_s(client)  # cold; it starts the fork server
+                _first_output_s(client)  # waits for the fork server's own imports
                 warm, cold = [], []
                 for _ in range(ROUNDS):
                     warm.append(_first_output_s(client))

@@ -2,10 +2,12 @@
 
 A console sim run's child would spend most of a second importing MuJoCo, numpy and the 3D view's
 server before the program's first line. The daemon keeps one fork server (openbricks_sim.fork_server)
-warm instead, started with the daemon, and asks it for each run's child: the child fences itself in
-first thing, as a spawned one does. What comes back looks like asyncio's Process to the job that
-minds it (pid, returncode, stdin, stdout, wait()), so the job has one way to steer a child however
-it was started. Where the OS cannot fork, or the server has gone, the run's child is spawned cold.
+warm instead and asks it for each run's child: the child fences itself in first thing, as a spawned
+one does. The server starts with the first sim run of the daemon's life (that run is spawned cold
+meanwhile, so it waits no longer than it did before), and stays for the runs after it: a daemon
+that never simulates never pays for one. What comes back looks like asyncio's Process to the job
+that minds it (pid, returncode, stdin, stdout, wait()), so the job has one way to steer a child
+however it was started. Where the OS cannot fork, or the server has gone, a child is spawned cold.
 """
 
 from __future__ import annotations
@@ -27,8 +29,6 @@ class WarmServer:
 
     def __init__(self):
         self._server: ForkServer | None = None
-        if hasattr(os, "fork"):
-            self._start()
 
     def _start(self) -> None:
         try:
@@ -40,8 +40,11 @@ class WarmServer:
     async def start(
         self, target: str, args: list[str], *, cwd: str, stderr: int, limit: int
     ) -> WarmProcess | None:
-        """The child, or None when there is no fork server to ask (the caller spawns one cold)."""
-        if self._server is None:
+        """The child, or None when there is no fork server to ask yet (the caller spawns one cold)."""
+        if not hasattr(os, "fork"):
+            return None
+        if self._server is None:  # the first run: it goes cold while the server warms for the next
+            self._start()
             return None
         if self._server.process.poll() is not None:  # it died: a new one for the runs to come
             log.warning(

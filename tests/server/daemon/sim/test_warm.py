@@ -30,9 +30,9 @@ async def _scenario(tmp_path):
     warm = WarmServer()
     try:
         with open(tmp_path / "child.log", "wb") as log:
-            process = await warm.start(
-                "console_job", [str(spec)], cwd=str(tmp_path), stderr=log.fileno(), limit=2**20
-            )
+            start = {"cwd": str(tmp_path), "stderr": log.fileno(), "limit": 2**20}
+            assert await warm.start("console_job", [str(spec)], **start) is None, "the first goes cold"
+            process = await warm.start("console_job", [str(spec)], **start)
         assert isinstance(process, WarmProcess)
         assert _parent_pid(process.pid) == warm._server.process.pid, "forked by the fork server"
         kinds = []
