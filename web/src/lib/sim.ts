@@ -1,6 +1,7 @@
 /** The simulator as the daemon serves it: its worlds, its runs (each a job with a 3D view and a replay). */
 
 import { api, query } from "./api";
+import { storedZip } from "./zip";
 import type { Job } from "./console.svelte";
 
 /** A sim run as `GET /api/sim/runs` answers it (the fields the page shows). */
@@ -38,6 +39,21 @@ export function speedLabel(speed: number | null): string {
 
 export async function listWorlds(): Promise<string[]> {
   return (await api.get<{ name: string }[]>("/api/sim/worlds")).map((w) => w.name);
+}
+
+export interface UploadedWorld {
+  name: string;
+  description: string;
+  uploaded: boolean;
+}
+
+/** Upload a world: one zip as it is, or a world file and its mat zipped here. */
+export async function uploadWorld(files: File[]): Promise<UploadedWorld> {
+  const zip =
+    files.length === 1 && files[0].name.toLowerCase().endsWith(".zip")
+      ? files[0]
+      : new Blob([storedZip(await Promise.all(files.map(async (f) => ({ name: f.name, data: new Uint8Array(await f.arrayBuffer()) }))))]);
+  return api.upload<UploadedWorld>("/api/sim/worlds", zip);
 }
 
 export async function getSimRun(runId: string): Promise<SimRun> {
