@@ -122,4 +122,7 @@ def test_completion_versions_file_operations_and_the_repl_in_the_page(console, p
     wait_for(lambda: output.count() == 2, what="the second value")
     assert output.nth(1).inner_text() == "42"
     screenshot(page, "editor-repl")
+    page.set_viewport_size({"width": 390, "height": 844})
+    page.locator("[data-testid=repl-output]").last.scroll_into_view_if_needed()
+    screenshot(page, "editor-repl-phone")
     assert not page.errors  # type: ignore[attr-defined]
