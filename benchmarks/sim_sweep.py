@@ -5,8 +5,12 @@ sim job costs before its program does anything.
   contained child process: interpreter start, imports, the world's build, the limits, the result
   back over a pipe). The median of a few runs, for the empty world and for the WRO table.
 - throughput: the same SEEDS seeds of a short drive across the WRO table (3 s simulated), on the
-  local pool with 2 workers, then on a Dask LocalCluster of 2 worker processes on 127.0.0.1 (its
-  start-up timed apart, as a standing cluster would not pay it per sweep).
+  local pool with 2 workers (its children forked from one warm fork server), then on a Dask
+  LocalCluster of 2 worker processes on 127.0.0.1 (its start-up timed apart, as a standing cluster
+  would not pay it per sweep);
+- the pool against one warm run at a time: WARM_RUNS seeds one after another from a warm fork server
+  give one warm run's rate, and the pool's throughput over WORKERS x that rate says how much of the
+  cores the sweep keeps busy (bar: >= 0.9).
 
 Every figure carries the 1-minute load average when it was taken: on a shared machine the load,
 not the engine, is often what moves them.
@@ -21,8 +25,9 @@ import time
 
 from benchmarks import Row
 
-SEEDS = 20
+SEEDS = 50
 WORKERS = 2
+WARM_RUNS = 10
 LATENCY_RUNS = 5
 
 
@@ -62,6 +67,22 @@ def _seeds_per_minute(case: str, job, **engine) -> Row:
     return Row(case, SEEDS / took * 60, "seeds/min", f"{SEEDS} seeds in {took:.1f} s; {load_before}")
 
 
+def _one_warm_run_per_minute(job) -> float:
+    """Seeds a minute one at a time, each forked from a fork server that has warmed up."""
+    from dataclasses import replace
+
+    from openbricks_sim.fork_server import ForkServer
+    from openbricks_sim.run_process import run_in_child
+
+    with ForkServer() as forker:
+        run_in_child(job, quiet=True, forker=forker)  # waits for the server's imports
+        started = time.perf_counter()
+        for seed in range(1, WARM_RUNS + 1):
+            result, _ = run_in_child(replace(job, seed=seed), quiet=True, forker=forker)
+            assert result.exit == "finished", result.error
+        return WARM_RUNS / (time.perf_counter() - started) * 60
+
+
 def run() -> list[Row]:
     from distributed import LocalCluster
 
@@ -76,7 +97,18 @@ def run() -> list[Row]:
         with open(program, "w") as f:
             f.write(CURVE)
         job = SimJob(program, world="wro", limit_ms=10_000)
-        rows.append(_seeds_per_minute(f"local pool, {WORKERS} workers", job, workers=WORKERS))
+        warm_rate = _one_warm_run_per_minute(job)
+        rows.append(Row("one warm run at a time", warm_rate, "seeds/min", f"{WARM_RUNS} seeds; {_load()}"))
+        pool = _seeds_per_minute(f"local pool, {WORKERS} workers", job, workers=WORKERS)
+        rows.append(pool)
+        rows.append(
+            Row(
+                f"pool / ({WORKERS} x one warm run)",
+                pool.value / (WORKERS * warm_rate),
+                "x",
+                "how busy the sweep keeps the cores; bar: >= 0.9",
+            )
+        )
         started = time.perf_counter()
         with LocalCluster(
             n_workers=WORKERS, threads_per_worker=1, processes=True, host="127.0.0.1", dashboard_address=None
