@@ -1,7 +1,7 @@
 """A team's table on the Simulator page, in Debian's Chromium against a real `openbricks console`: the
 world file and its mat picked as two files upload into the console's store, the new world is chosen
-and listed, a run on it draws its 3D view and is listed with the world's name, a bad world file shows
-its problems with their lines, and a viewer sees no upload at all."""
+and listed, a run on it draws its 3D view and is listed with the world's name (on the page and in
+the History), a bad world file shows its problems with their lines, and a viewer sees no upload."""
 
 from __future__ import annotations
 
@@ -45,6 +45,8 @@ def test_a_world_uploaded_on_the_page_runs_is_watched_and_listed_by_name(console
     with console.api() as api:
         runs = api.get("/api/sim/runs").json()
     assert runs[0]["world"] == "season_table"
+    page.goto(f"{console.base}/#/history?run={runs[0]['run_id']}")
+    page.locator("[data-testid=sim-world]", has_text="season_table · seed").wait_for()
     assert not page.errors  # type: ignore[attr-defined]
 
     viewer = page_for(console.sign_in_url(console.mint("viewer"), "sim"))

@@ -84,7 +84,14 @@ async def start_sweep(request: Request, body: SweepRequest, caller: Caller = STA
     except JobError as exc:
         raise ApiError.invalid("bad_sweep", str(exc), "see the fields of POST /api/sim/sweeps") from None
     job = _sweeps(request).start(
-        template, seeds, found["source"], found["version"], body.workers, body.dask, caller.label
+        template,
+        seeds,
+        found["source"],
+        found["version"],
+        body.workers,
+        body.dask,
+        caller.label,
+        world_label=body.world if world != body.world else None,
     )
     audit_as_started(request)
     return JobOut(**job.record())

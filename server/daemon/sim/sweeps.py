@@ -27,10 +27,21 @@ class SweepJobs:
         self._stops: dict[str, threading.Event] = {}
 
     def start(
-        self, template: SimJob, seeds: list[int], source: str, version: int, workers, dask, who: str
+        self,
+        template: SimJob,
+        seeds: list[int],
+        source: str,
+        version: int,
+        workers,
+        dask,
+        who: str,
+        world_label: str | None = None,
     ) -> Job:
-        # The program's stored version is kept, so one seed can be run again exactly as the sweep ran it.
+        # The program's stored version is kept, so one seed can be run again exactly as the sweep ran it;
+        # an uploaded world is kept by its name (what a run is started with), not its file's path.
         params = {**template.to_dict(), "version": version, "seeds": seeds, "workers": workers, "dask": dask}
+        if world_label is not None:
+            params["world"] = world_label
         job = self.jobs.create(KIND, template.program, who, params)
         stop = self._stops[job.job_id] = threading.Event()
 

@@ -75,6 +75,7 @@ def test_an_uploaded_world_is_listed_kept_run_scored_and_swept(daemon, operator,
     assert swept["state"] == "done", swept["message"]
     layouts = {json.dumps(row["score"]["props"], sort_keys=True) for row in swept["result"]["rows"]}
     assert len(layouts) == 3
+    assert swept["params"]["world"] == "season_table"  # a seed is run again by the world's name
 
 
 def test_a_bad_world_is_refused_with_its_lines_and_a_viewer_cannot_upload(operator, viewer, tmp_path):
