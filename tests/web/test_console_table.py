@@ -175,3 +175,20 @@ def test_a_lost_console_greys_the_page_and_it_comes_back_by_itself(tmp_path, pag
         assert page.locator("[data-testid=last-known]").count() == 0
     finally:
         stop_console(console.process)
+
+
+SCREENS = ["dashboard", "editor", "output", "history", "telemetry", "sim", "flash", "servo", "audit", "share"]
+
+
+def test_every_page_is_kept_as_a_screenshot_at_laptop_and_phone_width(console, page_for):
+    page = page_for(console.url, 1440, 900)
+    for width, height in ((1440, 900), (390, 844)):
+        page.set_viewport_size({"width": width, "height": height})
+        for page_id in SCREENS:
+            page.goto(f"{console.base}/#/{page_id}")
+            page.locator("main h1, main h3").first.wait_for()
+            page.wait_for_timeout(250)
+            box = page.locator("[data-testid=stop-all]").bounding_box()
+            assert box and box["x"] + box["width"] <= width, (page_id, width, box)
+            screenshot(page, f"page-{page_id}-{width}x{height}")
+    assert page.errors == [], page.errors

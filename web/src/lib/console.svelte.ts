@@ -170,8 +170,9 @@ export class ConsoleModel {
 
   /** Show a failed call the way the daemon explained it. */
   fail(err: unknown, what: string): void {
-    // The banner already says the console is unreachable: no toast per failed call on top of it.
-    if (err instanceof ApiError && err.status === 0 && this.connectionLost) return;
+    // Unreachable while the stream is not live: the banner says it (or will, as the stream's retry fails);
+    // no toast per failed call on top of it.
+    if (err instanceof ApiError && err.status === 0 && this.stream !== "live") return;
     if (err instanceof ApiError) {
       const said = plainError(err);
       this.notify("error", `${what}: ${said.message}`, said.hint);
