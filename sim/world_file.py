@@ -345,6 +345,13 @@ def parse(text: str, path: Path) -> WorldSpec:
             c.problem(w.of(key="mat"), "mat", f"{data['mat']!r} is not a PNG, JPEG or PDF file")
         elif not mat.is_file():
             c.problem(w.of(key="mat"), "mat", f"image {data['mat']!r} not found (looked for {mat})")
+        elif not _looks_like(mat):
+            kind = "PDF" if mat.suffix.lower() == ".pdf" else mat.suffix.lstrip(".").upper()
+            c.problem(
+                w.of(key="mat"),
+                "mat",
+                f"{data['mat']!r} is not a {kind} file (its first bytes say otherwise)",
+            )
 
     start = _start(c, data, size)
     walls = _walls(c, data)
@@ -374,6 +381,25 @@ def parse(text: str, path: Path) -> WorldSpec:
         rules=tuple(rules),
         time_limit_s=time_limit,
     )
+
+
+_SIGNATURES = {
+    ".png": (b"\x89PNG\r\n\x1a\n",),
+    ".jpg": (b"\xff\xd8\xff",),
+    ".jpeg": (b"\xff\xd8\xff",),
+    ".pdf": (b"%PDF-",),
+}
+
+
+def _looks_like(path: Path) -> bool:
+    """Whether a mat file starts as its kind of file does: a renamed or broken file is told here, by
+    the file's line, instead of failing the image decoder in the run's process."""
+    try:
+        with path.open("rb") as file:
+            head = file.read(8)
+    except OSError:
+        return False
+    return any(head.startswith(sig) for sig in _SIGNATURES[path.suffix.lower()])
 
 
 def _table(c: _Checker, value, key, line) -> dict | None:

@@ -104,3 +104,13 @@ def test_the_manuals_example_world_file_reads_as_written(tmp_path):
     from openbricks_sim.worlds import resolve
 
     assert resolve(str(path)).build(3).compile().nbody == 4  # the world body and the three props
+
+
+def test_a_mat_that_is_not_the_image_its_name_says_is_told_by_the_line(tmp_path):
+    path = write_table(tmp_path)
+    (tmp_path / "mat.png").write_bytes(b"GIF89a not a png")
+    with pytest.raises(WorldFileError) as caught:
+        load(path)
+    assert caught.value.problems == [
+        f"{path}:3: mat: 'mat.png' is not a PNG file (its first bytes say otherwise)"
+    ]

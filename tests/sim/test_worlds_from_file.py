@@ -141,3 +141,21 @@ def test_a_pdf_mat_renders_its_first_page_at_the_printed_size(tmp_path):
     assert mat.shape == (h, w, 3)
     assert np.abs(mat[h // 2, w // 4].astype(int) - PAPER).max() < 8  # the left half: paper
     assert np.abs(mat[h // 2, 3 * w // 4].astype(int) - PATCHES["blue"][0]).max() < 8
+
+
+def test_a_finer_image_is_reduced_to_a_texel_a_millimetre_with_its_edge_where_it_was_printed(tmp_path):
+    from PIL import Image
+
+    from openbricks_sim.worlds.mat_image import load_mat
+
+    # 400 x 200 mm drawn at 2.5 px/mm: ink from the left edge up to x = 123.2 mm (pixel 308).
+    pixels = np.full((500, 1000, 3), PAPER, dtype=np.uint8)
+    pixels[:, :308] = INK
+    Image.fromarray(pixels).save(tmp_path / "fine.png")
+    mat = load_mat(tmp_path / "fine.png", (400.0, 200.0))
+    assert mat.shape == (200, 400, 3)
+    level = srgb_to_linear(mat[100]).mean(axis=1)  # along x, texel centres at i + 0.5 mm
+    mid = (srgb_to_linear(PAPER).mean() + srgb_to_linear(INK).mean()) / 2
+    i = int(np.argmax(level > mid))
+    edge = i - 0.5 + (mid - level[i - 1]) / (level[i] - level[i - 1])  # linear between texel centres
+    assert abs(edge - 123.2) <= 1.0
