@@ -120,9 +120,7 @@ async def save_program(
 ) -> Saved:
     """Store the text as the program's newest version (checked first: name, size, text, syntax); the
     program's draft, now saved, is cleared."""
-    saved = await _save(request, check_name(name), body.source, caller.label, "saved")
-    request.app.state.ctx.store.drafts.delete(name)
-    return saved
+    return await _save(request, check_name(name), body.source, caller.label, "saved")
 
 
 @router.get("/{name}/draft", response_model=Draft)
@@ -156,10 +154,12 @@ async def list_drafts(request: Request) -> list[DraftInfo]:
 
 
 async def _save(request: Request, name: str, source: str, who: str, action: str) -> Saved:
-    """Check and store `source` as `name`'s newest version, announced as `action` when it is new."""
+    """Check and store `source` as `name`'s newest version, announced as `action` when it is new. The
+    program's draft goes: the text the editor works on is now this version (saved, restored, imported)."""
     await asyncio.to_thread(check_source, name, source)
     ctx = request.app.state.ctx
     version, created = ctx.store.programs.save(name, source, who)
+    ctx.store.drafts.delete(name)
     info = {k: v for k, v in version.items() if k != "source"}
     if created:
         ctx.events.publish("program", {"action": action, **info})

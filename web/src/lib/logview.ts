@@ -9,6 +9,7 @@
 import { PLAIN, type Run, type Style, parseLine, runHtml as span } from "./ansi";
 import type { Entry } from "./output";
 import { stamp } from "./output";
+import { frameOf } from "./traceback";
 
 interface Line {
   id: number;
@@ -44,6 +45,8 @@ export class LogLines {
   constructor(
     readonly capacity = 10000,
     readonly timestamps = false,
+    /** Traceback frames (`File "a.py", line 3`) drawn as links carrying their file and line. */
+    readonly linkFrames = false,
   ) {}
 
   get rowCount(): number {
@@ -127,7 +130,9 @@ export class LogLines {
     let sub = this.cum[0] + first - this.cum[i];
     for (let row = first; row < Math.min(total, first + count); row++) {
       const line = this.lines[i];
-      html += `<div class="r">${this.rowHtml(line, sub, mark && mark.id === line.id ? mark : null)}</div>`;
+      const frame = this.linkFrames ? frameOf(line.entry.text) : null;
+      const attrs = frame ? ` class="r at" data-file="${escapeAttr(frame.file)}" data-line="${frame.line}" title="Show line ${frame.line} in the editor"` : ` class="r"`;
+      html += `<div${attrs}>${this.rowHtml(line, sub, mark && mark.id === line.id ? mark : null)}</div>`;
       sub += 1;
       if (this.cum[0] + row + 1 >= this.cum[i + 1]) {
         i += 1;
@@ -192,4 +197,8 @@ export class LogLines {
     }
     return null;
   }
+}
+
+function escapeAttr(text: string): string {
+  return text.replace(/&/g, "&amp;").replace(/"/g, "&quot;").replace(/</g, "&lt;");
 }

@@ -156,6 +156,9 @@ def test_a_draft_is_kept_as_typed_and_saving_the_program_clears_it(operator):
     operator.post("/api/programs/new.py/rename", json={"new_name": "old.py"})
     moved = operator.get("/api/programs/old.py/draft").json()
     assert (moved["source"], moved["base_version"]) == ("x = 1\n", 1)
+    operator.post("/api/programs/old.py/versions/1/restore")  # the restored text is what is edited now
+    assert operator.get("/api/programs/old.py/draft").status_code == 404
+    operator.put("/api/programs/old.py/draft", json={"source": "z = 1\n"})
     assert operator.delete("/api/programs/old.py/draft").status_code == 204
     assert operator.delete("/api/programs/old.py/draft").status_code == 204  # nothing left is fine
     operator.put("/api/programs/old.py/draft", json={"source": "y = 2\n"})
