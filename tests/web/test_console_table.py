@@ -136,6 +136,7 @@ def test_words_a_student_understands(console, page_for):
     assert page.locator("[data-testid=notice]").count() == 0
     table = page.inner_text("[data-testid=audit]")
     assert f"Identified {hubs[0]}" in table and "/api/" not in table and "POST" not in table, table
+    assert f"Ran table_forever.py on {hubs[0]}" in table, table
     assert "Competition mode" not in page.inner_text("main")  # it lives on the Dashboard now
     page.goto(f"{console.base}/#/dashboard")
     page.locator("[data-testid=competition]", has_text="Competition mode").wait_for()

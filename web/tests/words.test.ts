@@ -1,5 +1,5 @@
 import { describe, expect, it } from "vitest";
-import { auditResult, auditWords, bluetoothWords, plain, plainError, stopAllSummary } from "../src/lib/words";
+import { auditResult, auditWords, bluetoothWords, plain, plainError, programOfRun, stopAllSummary } from "../src/lib/words";
 
 describe("words a student understands", () => {
   it("drops HTTP calls and UTC stamps from the daemon's messages", () => {
@@ -43,5 +43,21 @@ describe("words a student understands", () => {
     expect(auditResult(500, "flash /dev/ttyUSB0")).toBe("failed");
     expect(auditResult(403, "POST /api/hubs/stop-all")).toMatch(/refused/);
     expect(auditResult(200, "POST /api/hubs/stop-all")).toBe("done");
+  });
+});
+
+describe("an audit row's program", () => {
+  it("is the run that started on that hub just before the request was recorded", () => {
+    const runs = [
+      { hub_id: "virtual:SimHub-1", started_ms: 1000, program_name: "old.py" },
+      { hub_id: "virtual:SimHub-1", started_ms: 50_000, program_name: "square.py" },
+      { hub_id: "virtual:SimHub-2", started_ms: 50_010, program_name: "other.py" },
+    ];
+    const idOf = (ref: string) => (ref.startsWith("virtual:") ? ref : `virtual:${ref}`);
+    const row = { ts_ms: 50_200, action: "POST /api/hubs/SimHub-1/run" };
+    expect(programOfRun(row, runs, idOf)).toBe("square.py");
+    expect(auditWords(row.action, (x) => x, programOfRun(row, runs, idOf))).toBe("Ran square.py on SimHub-1");
+    expect(programOfRun({ ts_ms: 90_000, action: row.action }, runs, idOf)).toBeNull(); // too long after
+    expect(programOfRun({ ts_ms: 50_200, action: "POST /api/hubs/stop-all" }, runs, idOf)).toBeNull();
   });
 });

@@ -69,13 +69,13 @@ export function stopAllSummary(results: StopAllResult[]): { kind: "info" | "warn
   return { kind: failed.length ? "error" : unlinked.length ? "warn" : "info", message: parts.join(" ") };
 }
 
-function verb(method: string, path: string): string | null {
+function verb(method: string, path: string, program: string | null = null): string | null {
   const m = method.toUpperCase();
   const p = path.replace(/\/+$/, "");
   const rules: [string, RegExp, (g: string[]) => string][] = [
     ["POST", /^\/api\/hubs\/stop-all$/, () => "Stopped all hubs"],
-    ["POST", /^\/api\/hubs\/([^/]+)\/run$/, (g) => `Ran a program on ${g[0]}`],
-    ["POST", /^\/api\/hubs\/([^/]+)\/upload$/, (g) => `Uploaded a program to ${g[0]}`],
+    ["POST", /^\/api\/hubs\/([^/]+)\/run$/, (g) => `Ran ${program ?? "a program"} on ${g[0]}`],
+    ["POST", /^\/api\/hubs\/([^/]+)\/upload$/, (g) => `Uploaded ${program ?? "a program"} to ${g[0]}`],
     ["POST", /^\/api\/hubs\/([^/]+)\/stop$/, (g) => `Stopped ${g[0]}`],
     ["POST", /^\/api\/hubs\/([^/]+)\/identify$/, (g) => `Identified ${g[0]} (blinked its light)`],
     ["POST", /^\/api\/hubs\/([^/]+)\/connect$/, (g) => `Connected ${g[0]}`],
@@ -122,14 +122,15 @@ const JOB_KINDS: Record<string, string> = { flash: "Flash", sim: "Simulator run"
 
 /**
  * An audit row's action ("POST /api/hubs/virtual:SimHub-1/identify", or a job's "flash /dev/ttyUSB0") as
- * a sentence; `hubName` turns a hub id into the name on its tile.
+ * a sentence; `hubName` turns a hub id into the name on its tile, `program` names what a run or upload
+ * sent (the audit keeps the request, not its body: the page finds it in the run history).
  */
-export function auditWords(action: string, hubName: (idOrName: string) => string = (x) => x): string {
+export function auditWords(action: string, hubName: (idOrName: string) => string = (x) => x, program: string | null = null): string {
   const [method, ...rest] = action.trim().split(/\s+/);
   const path = rest.join(" ");
   if (/^(GET|POST|PUT|PATCH|DELETE)$/i.test(method) && path.startsWith("/")) {
     const hub = /^\/api\/hubs\/([^/]+)\//.exec(path);
-    const said = verb(method, hub && hub[1] !== "stop-all" ? path.replace(hub[1], encodeURIComponent(hubName(safeDecode(hub[1])))) : path);
+    const said = verb(method, hub && hub[1] !== "stop-all" ? path.replace(hub[1], encodeURIComponent(hubName(safeDecode(hub[1])))) : path, program);
     return said ?? `Changed something (${method.toUpperCase()} ${path})`;
   }
   // A job's end: its kind and label.
@@ -147,4 +148,30 @@ export function auditResult(status: number, action = ""): string {
   if (status === 409) return "refused (busy or locked)";
   if (status === 422 || status === 400) return "refused (bad input)";
   return "failed";
+}
+
+/** The hub an audit row's request addressed (by id or name, as the path has it), for finding its run. */
+export function auditHub(action: string): string | null {
+  const m = /^POST\s+\/api\/hubs\/([^/]+)\/(run|upload)$/i.exec(action.trim());
+  return m ? safeDecode(m[1]) : null;
+}
+
+/**
+ * The program a run request started: the run on that hub that began last before the request was
+ * recorded (the audit entry is written as the request ends, a moment after its run starts).
+ */
+export function programOfRun(
+  row: { ts_ms: number; action: string },
+  runs: { hub_id: string; started_ms: number; program_name: string | null }[],
+  hubIdOf: (idOrName: string) => string,
+): string | null {
+  const ref = auditHub(row.action);
+  if (ref === null || !/\/run$/.test(row.action.trim())) return null;
+  const hub = hubIdOf(ref);
+  let best: { started_ms: number; program_name: string | null } | null = null;
+  for (const r of runs) {
+    if (r.hub_id !== hub || r.started_ms > row.ts_ms || row.ts_ms - r.started_ms > 10000) continue;
+    if (!best || r.started_ms > best.started_ms) best = r;
+  }
+  return best?.program_name ?? null;
 }
