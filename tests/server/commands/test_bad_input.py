@@ -359,6 +359,30 @@ CASES = [
         FAILED,
         "not a model MuJoCo can load",
     ),
+    case(
+        "sim-run-bad-world-file",
+        "sim run {f}/ok.py --world {f}/table.toml",
+        FAILED,
+        "table.toml:2: size_mm: must be positive, got 0",
+        "table.toml:4: colour: unknown key",
+        "table.toml:1: mat: image 'missing.png' not found",
+    ),
+    case(
+        "sim-run-mat-without-size",
+        "sim run {f}/ok.py --world {f}/mat.png",
+        FAILED,
+        "add --mat-size WIDTHxHEIGHT",
+    ),
+    case(
+        "sim-run-bad-mat-size", "sim run {f}/ok.py --world {f}/mat.png --mat-size 2362", USAGE, "WIDTHxHEIGHT"
+    ),
+    case(
+        "console-bad-world-file",
+        "console --world {f}/table.toml",
+        USAGE,
+        "--world:",
+        "size_mm: must be positive",
+    ),
     case("sim-run-unknown-chassis", "sim run {f}/ok.py --chassis tank", USAGE, "invalid choice: 'tank'"),
     case("sim-run-negative-duration", "sim run {f}/ok.py --duration -1", USAGE, "give a positive number"),
     case("sim-run-zero-speed", "sim run {f}/ok.py --speed 0", USAGE, "give a positive number"),
@@ -392,6 +416,10 @@ def files(tmp_path_factory):
     (folder / "junk.bin").write_bytes(b"not a firmware image at all\n")
     (folder / "empty.bin").write_bytes(b"")
     (folder / "broken.xml").write_text("<mujoco><worldbody>\n")
+    (folder / "table.toml").write_text(
+        'mat = "missing.png"\nsize_mm = [2362, 0]\nstart = { x_mm = 100, y_mm = 100 }\ncolour = "red"\n'
+    )
+    (folder / "mat.png").write_bytes(b"\x89PNG\r\n\x1a\n")
     return folder
 
 
