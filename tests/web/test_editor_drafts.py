@@ -95,8 +95,13 @@ def test_a_run_shows_under_the_editor_and_a_runtime_error_marks_its_line(console
     screenshot(page, "editor-runtime-error")
 
     # A click on the traceback's line puts the cursor on that line of the program.
+    on_line_3 = "() => document.querySelector('.cm-activeLine')?.innerText === 'print(x / 0)'"
     frame.click()
-    page.wait_for_function(
-        "() => document.querySelector('.cm-activeLine')?.innerText === 'print(x / 0)'", timeout=5000
-    )
+    page.wait_for_function(on_line_3, timeout=5000)
+
+    # On the Output page too: the click opens the program in the Editor at that line.
+    page.goto(page.url.split("#")[0] + "#/output")
+    page.locator(f"[data-testid=output-pane][data-hub='{hub}'] .r.at", has_text="divide.py").click()
+    page.locator("h1", has_text="divide.py").wait_for()
+    page.wait_for_function(on_line_3, timeout=5000)
     assert not page.errors  # type: ignore[attr-defined]
