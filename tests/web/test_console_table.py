@@ -151,6 +151,8 @@ def test_a_lost_console_greys_the_page_and_it_comes_back_by_itself(tmp_path, pag
         console.wait_hubs_idle(2)
         operator = console.mint("operator")  # kept in the store: the cookie outlives a restart
         page = page_for(console.sign_in_url(operator))
+        # A second page signed in with the printed token, which a restart replaces.
+        printed = page_for(console.url)
         page.locator("[data-testid=hub-tile]").nth(1).wait_for()
         page.wait_for_function("() => !document.querySelector('[data-testid=stop-all]').disabled")
         os.killpg(console.process.pid, signal.SIGKILL)
@@ -174,6 +176,10 @@ def test_a_lost_console_greys_the_page_and_it_comes_back_by_itself(tmp_path, pag
         page.wait_for_function(f"() => !({stop_all_off})()", timeout=3000)
         assert time.monotonic() - back < 2.5
         assert page.locator("[data-testid=last-known]").count() == 0
+        # The page signed in with the old printed token says so, instead of retrying for ever.
+        printed.locator("[data-testid=connection-lost]", has_text="Signed out").wait_for(timeout=5000)
+        assert printed.is_disabled("[data-testid=stop-all]")
+        screenshot(printed, "dashboard-signed-out")
     finally:
         stop_console(console.process)
 

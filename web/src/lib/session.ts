@@ -49,7 +49,7 @@ export function startSession(): () => void {
       if (err instanceof ApiError && err.status === 401) {
         stream.stop();
         model.stream = "refused";
-        model.streamDetail = "the console restarted and no longer knows this page's sign-in";
+        model.streamDetail = "the console restarted with a new printed address";
       }
     } finally {
       probing = false;
