@@ -22,7 +22,10 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 PACKAGES = {"openbricks": "openbricks", "openbricks_sim": "sim", "openbricks_server": "server"}
 EXTENSIONS = ("openbricks_native", "openbricks_mjcontrol", "openbricks_pycost")
-SCRIPT = "#!{python}\nimport sys\nfrom openbricks_server.cli import main\nif __name__ == '__main__':\n    sys.exit(main())\n"
+SCRIPT = (
+    "#!{python}\nimport sys\nfrom openbricks_server.cli import main\n"
+    "if __name__ == '__main__':\n    sys.exit(main())\n"
+)
 
 
 def venv_dir() -> Path:
