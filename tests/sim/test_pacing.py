@@ -17,7 +17,7 @@ from openbricks_sim.simulation import Simulation
 @pytest.fixture
 def sim():
     simulation = Simulation("empty", "st3032", epoch_ms=0)
-    simulation.physics  # built now: these pace real physics steps, not a clock with nothing to step
+    assert simulation.physics.model  # built now: these pace real physics steps, not a clock alone
     yield simulation
     simulation.close()
 

@@ -12,7 +12,7 @@ from openbricks_sim.simulation import Simulation
 @pytest.fixture
 def sim():
     s = Simulation("empty", "st3032", epoch_ms=1_700_000_000_000)
-    s.physics  # the robot's own devices on the board first: tests put their models over them
+    assert s.physics.model  # the robot's own devices on the board first: tests put theirs over them
     yield s
     s.close()
 
