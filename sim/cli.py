@@ -37,6 +37,7 @@ from openbricks_sim.job import (
     add_seed_argument,
     job_from_args,
     positive_argument,
+    run_duration_s,
     sized_world,
     start_pose,
     world_file,
@@ -159,6 +160,8 @@ def main(argv: list[str] | None = None) -> int:
         return EXIT_OK
     args.world = sized_world(args)  # IMAGE@WxH from --world IMAGE --mat-size WxH
     args.mat_size = None
+    if args.command in ("run", "sweep"):
+        args.duration = run_duration_s(args)  # a world file's round length when --duration is not given
     try:
         _require_mujoco(loaded_here=args.command != "run" or args.no_shim or args.viewer)
         if args.command == "preview":

@@ -382,8 +382,10 @@ def add_run_arguments(parser: argparse.ArgumentParser, single_run: bool = True) 
     parser.add_argument(
         "--duration",
         type=positive_argument,
-        default=DEFAULT_LIMIT_MS / 1000,
-        help="Simulated seconds before the run is cut off (exit time_limit). Default: %(default)s.",
+        help=(
+            "Simulated seconds before the run is cut off (exit time_limit). Default: the world file's "
+            f"time_limit_s, else {DEFAULT_LIMIT_MS / 1000:g}."
+        ),
     )
     parser.add_argument(
         "--wall-limit",
@@ -443,6 +445,22 @@ def mat_size_argument(text: str) -> tuple[float, float]:
         raise argparse.ArgumentTypeError(str(exc)) from None
 
 
+def run_duration_s(args) -> float:
+    """--duration, else the time limit of the world file --world names (a round's length), else the
+    default. A world that cannot be read gives the default: its problems are told where it is built."""
+    if args.duration is not None:
+        return args.duration
+    from .world_file import WorldFileError, open_world
+
+    try:
+        spec = open_world(args.world)
+    except WorldFileError:
+        spec = None
+    if spec is not None and spec.time_limit_s is not None:
+        return spec.time_limit_s
+    return DEFAULT_LIMIT_MS / 1000
+
+
 def sized_world(args) -> str:
     """--world, with --mat-size folded in as IMAGE@WxH: the one string a SimJob carries."""
     size = getattr(args, "mat_size", None)
@@ -480,7 +498,7 @@ def job_from_args(args, program: str) -> SimJob:
         seed=getattr(args, "seed", 0),
         start_mm_deg=start,
         speed=getattr(args, "speed", None),
-        limit_ms=int(round(args.duration * 1000)),
+        limit_ms=int(round(run_duration_s(args) * 1000)),
         wall_limit_s=args.wall_limit,
         cpu_limit_s=args.cpu_limit,
         memory_mb=args.memory_mb,

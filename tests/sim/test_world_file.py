@@ -114,3 +114,15 @@ def test_a_mat_that_is_not_the_image_its_name_says_is_told_by_the_line(tmp_path)
     assert caught.value.problems == [
         f"{path}:3: mat: 'mat.png' is not a PNG file (its first bytes say otherwise)"
     ]
+
+
+def test_a_world_files_time_limit_is_a_runs_duration_unless_duration_is_given(tmp_path):
+    from openbricks_sim.cli import build_parser
+    from openbricks_sim.job import job_from_args
+
+    world = str(write_table(tmp_path))
+    parser = build_parser()
+    assert job_from_args(parser.parse_args(["run", "m.py", "--world", world]), "m.py").limit_ms == 150_000
+    given = parser.parse_args(["sweep", "m.py", "--world", world, "--duration", "2", "--seeds", "1-2"])
+    assert job_from_args(given, "m.py").limit_ms == 2_000
+    assert job_from_args(parser.parse_args(["run", "m.py"]), "m.py").limit_ms == 60_000
