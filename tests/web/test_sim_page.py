@@ -37,7 +37,7 @@ def test_a_run_started_on_the_page_draws_its_view_then_replays_and_a_sweep_repor
     page = page_for(console.url)
     page.goto(f"{console.base}/#/sim")
     page.get_by_label("Program").select_option("drive.py")
-    page.get_by_label("World").select_option("empty")
+    page.get_by_label("World", exact=True).select_option("empty")
     page.get_by_role("button", name="Start simulation").click()
 
     view = page.frame_locator("iframe[title='3D view']")
