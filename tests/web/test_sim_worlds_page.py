@@ -8,11 +8,23 @@ from __future__ import annotations
 import pytest
 
 from tests.sim.season_table import WORLD_TOML, write_table
+from tests.web.conftest import screenshot
 
 pytestmark = pytest.mark.e2e
 
 RUN_S = 180_000
-SHORT = "from openbricks.tools import wait\nimport openbricks.drivers.qtr\nwait(200)\nprint('on the table')\n"
+SHORT = """\
+from openbricks.drivers.st3032 import ST3032Motor
+from openbricks.robotics import DriveBase
+from openbricks.tools import wait
+
+left = ST3032Motor(servo_id=1, uart_id=1, tx=14, rx=41)
+right = ST3032Motor(servo_id=2, uart_id=1, tx=14, rx=41, invert=True)
+db = DriveBase(left, right, wheel_diameter_mm=88, axle_track_mm=138)
+db.straight(100)
+print('on the table')
+wait(3000)
+"""
 
 
 def test_a_world_uploaded_on_the_page_runs_is_watched_and_listed_by_name(console, page_for, tmp_path):
@@ -37,11 +49,14 @@ def test_a_world_uploaded_on_the_page_runs_is_watched_and_listed_by_name(console
     page.wait_for_function(
         "document.querySelector('select[aria-label=World]').value === 'season_table'", timeout=20000
     )
+    assert upload.get_by_role("button", name="Upload world").is_disabled()  # the picker is empty again
     page.get_by_label("Program").select_option("short.py")
     page.get_by_role("button", name="Start simulation").click()
     page.frame_locator("iframe[title='3D view']").locator("canvas").first.wait_for(timeout=RUN_S)
     page.locator("[data-testid=sim-output]").get_by_text("on the table").wait_for(timeout=RUN_S)
     page.locator("[data-testid=sim-runs] tbody tr", has_text="season_table").first.wait_for(timeout=RUN_S)
+    page.wait_for_timeout(1500)  # the view draws the table's mat
+    screenshot(page, "sim-season-table")
     with console.api() as api:
         runs = api.get("/api/sim/runs").json()
     assert runs[0]["world"] == "season_table"
