@@ -11,6 +11,7 @@ parser itself.
 
 from __future__ import annotations
 
+import os
 import re
 import shlex
 import shutil
@@ -34,8 +35,18 @@ def plan(tmp_path_factory) -> list[str]:
     subprocess.run(["git", "clone", "-q", "--no-hardlinks", str(ROOT), str(clone)], check=True, timeout=120)
     for name in SETUP_FILES:  # as the working tree has them, so an edit is tested before it is committed
         shutil.copyfile(ROOT / name, clone / name)
+    # A make of its own, as a user's shell starts it: not a sub-make of the `make test` running us,
+    # whose flags would add "Entering directory" lines.
+    env = {
+        k: v for k, v in os.environ.items() if k not in ("MAKEFLAGS", "MAKELEVEL", "MFLAGS", "MAKEOVERRIDES")
+    }
     done = subprocess.run(
-        ["make", "-n", "console", f"ARGS={ARGS}"], cwd=clone, capture_output=True, text=True, timeout=60
+        ["make", "-n", "console", f"ARGS={ARGS}"],
+        cwd=clone,
+        capture_output=True,
+        text=True,
+        timeout=60,
+        env=env,
     )
     assert done.returncode == 0, done.stderr
     return done.stdout.splitlines()

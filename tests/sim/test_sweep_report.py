@@ -121,24 +121,33 @@ def test_an_unreachable_dask_scheduler_is_named_with_what_to_check(program, caps
     assert "is `dask scheduler` running there" in err
 
 
-def _processes_running(marker):
-    """Pids whose command line mentions `marker` (the sweep's children carry the program's name)."""
+def _children(pid):
+    """The processes whose parent is `pid` now."""
     found = []
-    for pid in filter(str.isdigit, os.listdir("/proc")):
+    for entry in filter(str.isdigit, os.listdir("/proc")):
         try:
-            with open(f"/proc/{pid}/cmdline", "rb") as f:
-                if marker.encode() in f.read():
-                    found.append(int(pid))
+            with open(f"/proc/{entry}/stat", encoding="ascii") as f:
+                fields = f.read().rsplit(")", 1)[1].split()
         except OSError:
             continue
+        if int(fields[1]) == pid and fields[0] != "Z":
+            found.append(int(entry))
     return found
+
+
+def _alive(pid):
+    try:
+        with open(f"/proc/{pid}/stat", encoding="ascii") as f:
+            return f.read().rsplit(")", 1)[1].split()[0] != "Z"
+    except OSError:
+        return False
 
 
 @pytest.mark.e2e
 @pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM])
 def test_ctrl_c_or_sigterm_ends_a_sweep_and_stops_every_running_seed(tmp_path, signum):
     program = tmp_path / "forever_sweep_probe.py"
-    program.write_text("import time\nwhile True:\n    time.sleep_ms(50)\n")
+    program.write_text("while True:\n    pass\n")  # no simulated time passes: it runs until stopped
     sweep_cli = subprocess.Popen(
         [sys.executable, "-m", "openbricks_server.cli", "sim", "sweep", str(program), "--seeds", "1-4"]
         + ["--workers", "2", "--duration", "3600", "--wall-limit", "600"],
@@ -148,19 +157,23 @@ def test_ctrl_c_or_sigterm_ends_a_sweep_and_stops_every_running_seed(tmp_path, s
     )
 
     def seeds_running():
-        return [pid for pid in _processes_running(program.name) if pid != sweep_cli.pid]
+        # The CLI's child is the sweep's fork server; each seed is a child of that.
+        return [seed for server in _children(sweep_cli.pid) for seed in _children(server)]
 
+    seen = []
     try:
         deadline = time.monotonic() + 60
         while len(seeds_running()) < 2 and time.monotonic() < deadline:
             time.sleep(0.2)
-        assert len(seeds_running()) == 2, f"two seeds should be running: {seeds_running()}"
+        seen = seeds_running()
+        assert len(seen) == 2, f"two seeds should be running: {seen}"
         sweep_cli.send_signal(signum)
         _, err = sweep_cli.communicate(timeout=60)
         assert sweep_cli.returncode == 130, err
         assert "sweep interrupted after 0 of 4 seeds" in err and "Traceback" not in err, err
-        assert seeds_running() == [], err
+        assert [pid for pid in seen if _alive(pid)] == [], err
     finally:
         sweep_cli.kill()
-        for pid in seeds_running():  # a failed test leaves no runs behind
-            os.kill(pid, signal.SIGKILL)
+        for pid in seen:  # a failed test leaves no runs behind
+            if _alive(pid):
+                os.kill(pid, signal.SIGKILL)
