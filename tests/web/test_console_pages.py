@@ -337,7 +337,12 @@ def test_a_terminal_follows_until_its_reader_scrolls_up(console, page_for):
     scroller = pane.locator("[data-testid=terminal] > div").first
     try:
         # Enough lines to scroll: more than the pane has rows.
-        page.wait_for_function("(el) => el.scrollHeight > 2 * el.clientHeight", arg=scroller.element_handle())
+        # Asked of the pane on show each time (not a handle to the element of the moment).
+        page.wait_for_function(
+            "(sel) => { const el = document.querySelector(sel);"
+            " return el && el.scrollHeight > 2 * el.clientHeight; }",
+            arg=f"[data-testid=output-pane][data-hub='{name}'] [data-testid=terminal] > div",
+        )
         # A scroll nobody asked for: the view goes back to the bottom and keeps following.
         scroller.evaluate("(el) => { el.scrollTop = 0; }")
         seen = page.evaluate(SHOWN_LAST, [name, "busy"])
