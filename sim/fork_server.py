@@ -65,7 +65,7 @@ START_TIMEOUT_S = 60.0  # the server's own imports on a busy machine, before it 
 def serve(control_fd: int) -> int:
     """The server's main loop: fork a child per request, report each one's end."""
     # Interrupts are for the children (whoever asked for them forwards them); the server ends when
-    # its request socket closes.
+    # its stdin closes (its requester is done) and its children have ended.
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     for name in WARM_IMPORTS:
         try:
