@@ -22,7 +22,10 @@ Then the stepping figure: the six-lap program's own run (the program phase ours 
 first line to its last, less the physics' build at its first hardware use) against bare `mj_step`
 of the same model (the st3032 chassis on `empty`, no control callback) for the same number of
 steps, at rest and with the wheels driven, in a process of the installed layout, alternated with
-the runs.
+the runs. That ratio is of medians: a shared machine's CPUs run in spells (here mostly at one speed
+and now and then, for a fraction of a second, much faster, each CPU on its own), and a best-of
+figure favours the shorter run, which fits in a fast spell more often. The best of each is shown
+beside it, and every ratio row gives its medians too.
 
 Note: the manual's example wires the left wheel as servo 2 (mirrored) and the right as servo 1; our
 simulator mounts the servos where the program's DriveBase says they are, so it drives the same
@@ -33,6 +36,7 @@ from __future__ import annotations
 
 import json
 import os
+import statistics
 import subprocess
 import tempfile
 import time
@@ -260,6 +264,7 @@ def _program_rows(name: str, ours: list[Measured], reference: list[Measured]) ->
     best_ref = min(reference, key=lambda m: m.wall_s)
     cpu_ours = min(m.cpu_s for m in ours)
     cpu_ref = min(m.cpu_s for m in reference)
+    median_ratio = statistics.median(m.wall_s for m in reference) / statistics.median(m.wall_s for m in ours)
     simulated = f"{best_ours.sim_s:.1f} s simulated, " if best_ours.sim_s else ""
     return [
         Row(f"{name}: reference {REFERENCE_VERSION}", best_ref.wall_s, "s wall", f"cpu {cpu_ref:.2f} s"),
@@ -273,27 +278,43 @@ def _program_rows(name: str, ours: list[Measured], reference: list[Measured]) ->
             f"{name}: speed ratio (reference / ours)",
             best_ref.wall_s / best_ours.wall_s,
             "x",
-            f"whole process, wall; cpu {cpu_ref / cpu_ours:.2f}x",
+            f"whole process, wall, best of {len(ours)}; medians {median_ratio:.2f}x; "
+            f"cpu {cpu_ref / cpu_ours:.2f}x",
         ),
     ]
 
 
 def _stepping_rows(runs: list[Measured], bare: dict[str, list[float]]) -> list[Row]:
-    program_s = min(m.program_s for m in runs)
+    # The program's own stepping: its run less the physics' build, which is start-up (counted in the
+    # whole-process figures above) that happens to fall at the program's first hardware use.
+    stepping = [m.program_s - (m.build_s or 0.0) for m in runs]
+    program_s = statistics.median(stepping)
     sim_s = runs[0].sim_s
     rows = [
         Row(
             "six laps: program phase",
             sim_s / program_s,
             "x real time",
-            f"{program_s:.3f} s for {sim_s:.1f} s",
+            f"median {program_s:.3f} s for {sim_s:.1f} s (best {min(stepping):.3f} s), the build apart",
         )
     ]
     for how, seconds in bare.items():
-        best = min(seconds)
-        rows.append(Row(f"bare mj_step, same model, {how}", sim_s / best, "x real time", f"{best:.3f} s"))
+        median = statistics.median(seconds)
         rows.append(
-            Row(f"stepping / bare mj_step {how}", best / program_s * 100, "%", "program phase; bar: >= 80 %")
+            Row(
+                f"bare mj_step, same model, {how}",
+                sim_s / median,
+                "x real time",
+                f"median {median:.3f} s (best {min(seconds):.3f} s)",
+            )
+        )
+        rows.append(
+            Row(
+                f"stepping / bare mj_step {how}",
+                median / program_s * 100,
+                "%",
+                f"medians; best of each {min(seconds) / min(stepping) * 100:.0f} %; bar: >= 80 %",
+            )
         )
     return rows
 

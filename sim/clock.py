@@ -12,6 +12,11 @@ Between two Python timer due times the physics runs as one native
 Python timers therefore cost one call each, and a program that sleeps 10 s
 with no timers pending costs one call for the whole 10 s.
 
+Most advances have nothing due on the way: a move's 10 ms poll, a ticks_ms()
+read. Those go straight to the native controller's step, skipping the timer
+queue and the layers between the clock and the physics, because that Python
+is most of what a waiting program costs beside the physics itself.
+
 The clock itself never waits: headless runs go as fast as the CPU allows,
 and a paced run (real time, twice as fast, paused by a viewer) has a Pacer
 (pacing.py), a timer on this clock that holds the program back.
@@ -21,7 +26,6 @@ still let time pass, as it does on a hub where every call takes CPU time:
 each ticks_*() call costs CPU_US_PER_TICKS_CALL (shim/mptime.py) of simulated time.
 """
 
-import threading
 import time
 
 from .shim.virtual_clock import VirtualClock
@@ -49,7 +53,8 @@ class SimClock(VirtualClock):
         self._physics = physics
         self._stepping = False  # inside physics.step(): the controllers' tick is running
         self.limit_ms = limit_ms
-        self._stop = threading.Event()
+        self._stop_requested = False  # a bool, not an Event: read on every advance, set from any thread
+        self._controller = None  # the physics' native controller, once built (the fast path's step)
         # The Python-time charge (python_cost.py) while a program runs: the clock's own work is the
         # hub's, so counting stops while time advances and starts again for each timer callback.
         self.python_cost = None
@@ -66,22 +71,44 @@ class SimClock(VirtualClock):
 
     def request_stop(self) -> None:
         """Make the program's next sleep (or bus transfer) raise SimStopped. Safe from any thread."""
-        self._stop.set()
+        self._stop_requested = True
+
+    def follow(self, controller) -> None:
+        """Step `controller` (the built physics' openbricks_mjcontrol.Controller) directly when nothing
+        else is due: it is what physics.step() would call."""
+        self._controller = controller
 
     def advance_us(self, us: int) -> None:
         """Let us microseconds of simulated time pass, firing due timers and running the physics."""
-        if self._stop.is_set():
-            self._stop.clear()
+        if self._stop_requested:
+            self._stop_requested = False
             raise SimStopped("the run was stopped")
+        # The clock's own work is the hub's: no charge for it, and no profile hook slowing it down.
         cost = self.python_cost
-        if cost is None or not cost.counting:
-            super().advance_us(us)
-            return
-        cost.pause()
+        counting = cost is not None and cost.counting
+        if counting:
+            cost.pause()
         try:
+            controller = self._controller
+            if controller is not None and not self._advancing and not self._next_time:
+                target_us = self._now_us + max(0, int(us))
+                queue = self._queue
+                nothing_due = not queue or queue[0][0] > target_us
+                limit_ms = self.limit_ms
+                if nothing_due and (limit_ms is None or target_us < limit_ms * 1000):
+                    n_ms = target_us // 1000 - controller.now_ms
+                    if n_ms > 0:
+                        self._stepping = True
+                        try:
+                            controller.step(n_ms)
+                        finally:
+                            self._stepping = False
+                    self._now_us = target_us
+                    return
             super().advance_us(us)
         finally:
-            cost.resume()
+            if counting:
+                cost.resume()
 
     def schedule(self, callback, delay_us, period_us=0):
         """VirtualClock.schedule(); the callback is the program's or the runtime's code, so it counts."""

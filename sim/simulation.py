@@ -123,6 +123,7 @@ class Simulation:
             physics.close()
             raise
         self._built = (physics, world_process, controller, wiring, sensors)
+        self.clock.follow(controller)
         return self._built
 
     # --- what the clock drives ----------------------------------------------------------------

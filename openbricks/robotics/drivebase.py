@@ -136,7 +136,8 @@ class DriveBase:
         while True:
             if estop.engaged():
                 estop.check("DriveBase." + what)
-            self._raise_if_halted()
+            if controller.fault() is not None:
+                self._raise_if_halted()
             if controller.done():
                 return
             time.sleep_ms(_POLL_MS)

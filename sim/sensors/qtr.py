@@ -59,7 +59,8 @@ class QTRBarModel:
         self.dark_raw = dark_raw
         self.raw_per_reflectance = raw_per_reflectance
         self.noise_counts = noise_counts
-        self._rng = np.random.default_rng(seed)
+        self._seed = seed
+        self._rng = None  # made at the first read: most programs never read the bar, nor pay numpy.random
         self._sampled_us = None
         self._raw = [0] * len(self.pins)
 
@@ -77,6 +78,8 @@ class QTRBarModel:
         if now != self._sampled_us:
             self._sampled_us = now
             counts = self.dark_raw - self.raw_per_reflectance * self.reflectance()
+            if self._rng is None:
+                self._rng = np.random.default_rng(self._seed)
             counts += self._rng.normal(0.0, self.noise_counts, len(counts))
             self._raw = np.clip(counts, 0, _ADC_MAX).astype(int).tolist()
         return self._raw

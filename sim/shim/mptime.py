@@ -27,21 +27,23 @@ def bind(clock):
     _clock[0] = clock
 
 
+def _unbound():
+    raise RuntimeError("the simulator's time module is not bound to a simulated clock")
+
+
 def _sim_clock():
-    clock = _clock[0]
-    if clock is None:
-        raise RuntimeError("the simulator's time module is not bound to a simulated clock")
-    return clock
+    # `or` rather than a call when bound: a move's wait reads the clock and sleeps every 10 ms.
+    return _clock[0] or _unbound()
 
 
 def ticks_us():
-    clock = _sim_clock()
+    clock = _clock[0] or _unbound()
     clock.charge_cpu_us(CPU_US_PER_TICKS_CALL)
     return clock.now_us() & TICKS_MAX
 
 
 def ticks_ms():
-    clock = _sim_clock()
+    clock = _clock[0] or _unbound()
     clock.charge_cpu_us(CPU_US_PER_TICKS_CALL)
     return clock.now_ms() & TICKS_MAX
 
@@ -65,7 +67,7 @@ def sleep_us(us):
 
 def sleep_ms(ms):
     if ms >= 0:
-        _sim_clock().advance_us(int(ms * 1000))
+        (_clock[0] or _unbound()).advance_us(int(ms * 1000))
 
 
 def sleep(seconds):

@@ -1,5 +1,9 @@
 """The simulated clock: Python timers fire at their due times while the physics follows in whole
-milliseconds, one physics call per stretch between due times."""
+milliseconds, one physics call per stretch between due times.
+
+Each test runs twice: with the clock stepping the physics through its timer queue, and with it
+following the built physics' controller directly when nothing is due (SimClock.follow), which is
+how a simulation runs once its physics is built. Both must give the same times and steps."""
 
 import threading
 
@@ -20,9 +24,22 @@ class RecordingPhysics:
         self.now_ms += n
 
 
-def test_periodic_timer_fires_at_each_due_time_with_the_physics_already_there():
+@pytest.fixture(params=["through the queue", "following the controller"])
+def new_clock(request):
+    """SimClock(physics, ...), following `physics` as its controller in the second run."""
+
+    def make(physics, **options):
+        clock = SimClock(physics, **options)
+        if request.param == "following the controller":
+            clock.follow(physics)  # RecordingPhysics has the controller's now_ms and step(n)
+        return clock
+
+    return make
+
+
+def test_periodic_timer_fires_at_each_due_time_with_the_physics_already_there(new_clock):
     physics = RecordingPhysics()
-    clock = SimClock(physics)
+    clock = new_clock(physics)
     seen = []
     clock.schedule(lambda: seen.append((clock.now_us(), physics.now_ms)), 10_000, 10_000)
     clock.advance_us(35_000)
@@ -31,16 +48,16 @@ def test_periodic_timer_fires_at_each_due_time_with_the_physics_already_there():
     assert clock.now_us() == 35_000
 
 
-def test_a_long_sleep_with_nothing_due_is_one_physics_call():
+def test_a_long_sleep_with_nothing_due_is_one_physics_call(new_clock):
     physics = RecordingPhysics()
-    clock = SimClock(physics)
+    clock = new_clock(physics)
     clock.advance_us(10_000_000)
     assert physics.calls == [10_000]
 
 
-def test_sub_millisecond_sleeps_add_up_and_the_physics_follows_whole_milliseconds():
+def test_sub_millisecond_sleeps_add_up_and_the_physics_follows_whole_milliseconds(new_clock):
     physics = RecordingPhysics()
-    clock = SimClock(physics)
+    clock = new_clock(physics)
     for _ in range(3):
         clock.advance_us(400)
     assert clock.now_us() == 1200
@@ -49,9 +66,9 @@ def test_sub_millisecond_sleeps_add_up_and_the_physics_follows_whole_millisecond
     assert physics.now_ms == 2
 
 
-def test_one_shot_timer_fires_once_and_a_cancelled_one_never():
+def test_one_shot_timer_fires_once_and_a_cancelled_one_never(new_clock):
     physics = RecordingPhysics()
-    clock = SimClock(physics)
+    clock = new_clock(physics)
     fired = []
     clock.schedule(lambda: fired.append("once"), 5_000)
     cancelled = clock.schedule(lambda: fired.append("cancelled"), 6_000, 1_000)
@@ -60,9 +77,9 @@ def test_one_shot_timer_fires_once_and_a_cancelled_one_never():
     assert fired == ["once"]
 
 
-def test_a_timer_callback_that_sleeps_moves_time_on_without_nesting_timers():
+def test_a_timer_callback_that_sleeps_moves_time_on_without_nesting_timers(new_clock):
     physics = RecordingPhysics()
-    clock = SimClock(physics)
+    clock = new_clock(physics)
     order = []
 
     def slow():
@@ -78,17 +95,17 @@ def test_a_timer_callback_that_sleeps_moves_time_on_without_nesting_timers():
     assert clock.now_us() == 10_000 and physics.now_ms == 10
 
 
-def test_time_limit_stops_the_physics_exactly_at_the_limit():
+def test_time_limit_stops_the_physics_exactly_at_the_limit(new_clock):
     physics = RecordingPhysics()
-    clock = SimClock(physics, limit_ms=250)
+    clock = new_clock(physics, limit_ms=250)
     clock.advance_us(200_000)
     with pytest.raises(SimTimeLimit, match="250 ms"):
         clock.advance_us(100_000)
     assert physics.now_ms == 250 and clock.now_ms() == 250
 
 
-def test_stop_requested_from_another_thread_ends_the_next_sleep():
-    clock = SimClock(RecordingPhysics())
+def test_stop_requested_from_another_thread_ends_the_next_sleep(new_clock):
+    clock = new_clock(RecordingPhysics())
     thread = threading.Thread(target=clock.request_stop)
     thread.start()
     thread.join()
@@ -97,8 +114,8 @@ def test_stop_requested_from_another_thread_ends_the_next_sleep():
     clock.advance_us(1_000)  # the request is consumed: the next sleep runs normally
 
 
-def test_rtc_follows_simulated_time_and_can_be_set():
-    clock = SimClock(RecordingPhysics(), epoch_ms=1_700_000_000_000)
+def test_rtc_follows_simulated_time_and_can_be_set(new_clock):
+    clock = new_clock(RecordingPhysics(), epoch_ms=1_700_000_000_000)
     clock.advance_us(1_500_000)
     assert clock.epoch_us() == 1_700_000_001_500_000
     clock.set_epoch_ms(1_800_000_000_000)
