@@ -22,9 +22,9 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 PACKAGES = {"openbricks": "openbricks", "openbricks_sim": "sim", "openbricks_server": "server"}
 EXTENSIONS = ("openbricks_native", "openbricks_mjcontrol", "openbricks_pycost")
-SCRIPT = (
-    "#!{python}\nimport sys\nfrom openbricks_server.cli import main\n"
-    "if __name__ == '__main__':\n    sys.exit(main())\n"
+SCRIPT = (  # what pip writes for pyproject.toml's [project.scripts] entry
+    "#!{python}\nimport sys\nfrom openbricks_server.cli import run\n"
+    "if __name__ == '__main__':\n    sys.exit(run())\n"
 )
 
 

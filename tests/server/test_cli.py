@@ -144,3 +144,26 @@ def test_tab_completes_commands_and_options_from_the_real_parser(tmp_path):
     assert status == 0 and {"list", "log"} <= set(words)
     _, options = complete("openbricks log --l")
     assert "--list" in options
+
+
+def _command(argv: list[str], before: str = "") -> subprocess.CompletedProcess:
+    """`openbricks ARGV` as its console script runs it (cli.run), with `before` run first in the process."""
+    probe = f"import sys\n{before}\nsys.argv = ['openbricks', *{argv!r}]\n"
+    probe += "from openbricks_server.cli import run\nrun()\n"
+    return subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, timeout=120)
+
+
+def test_the_command_exits_with_its_status_its_output_flushed_and_its_exit_handlers_run(tmp_path):
+    program = tmp_path / "hello.py"
+    program.write_text("print('hello from the hub')\n", encoding="utf-8")
+    at_exit = "import atexit\natexit.register(lambda: print('exit handlers ran', file=sys.stderr))"
+    done = _command(["sim", "run", str(program)], before=at_exit)
+    assert done.returncode == 0, done.stderr
+    assert "hello from the hub" in done.stdout  # a pipe: block-buffered, flushed on the way out
+    assert "exit handlers ran" in done.stderr
+
+    failed = _command(["sim", "run", str(tmp_path / "missing.py")])
+    assert failed.returncode != 0 and "missing.py" in failed.stderr
+
+    usage = _command(["no-such-command"])
+    assert usage.returncode == 2 and "invalid choice" in usage.stderr
