@@ -121,3 +121,24 @@ def test_rtc_follows_simulated_time_and_can_be_set(new_clock):
     clock.set_epoch_ms(1_800_000_000_000)
     clock.advance_us(1_000)
     assert clock.epoch_us() == 1_800_000_000_001_000
+
+
+def test_cpu_charges_add_up_and_a_charge_over_a_millisecond_steps_the_physics(new_clock):
+    physics = RecordingPhysics()
+    clock = new_clock(physics)
+    fired = []
+    clock.schedule(lambda: fired.append(clock.now_us()), 1_500)
+    for _ in range(499):
+        clock.charge_cpu_us(2)  # a ticks_ms() read each
+    assert clock.now_us() == 998 and physics.calls == [] and fired == []
+    clock.charge_cpu_us(2)
+    assert clock.now_us() == 1_000 and physics.now_ms == 1
+    clock.charge_cpu_us(600)
+    assert fired == [1_500] and clock.now_us() == 1_600 and physics.now_ms == 1
+
+
+def test_a_stop_reaches_a_program_that_only_reads_the_clock(new_clock):
+    clock = new_clock(RecordingPhysics())
+    clock.request_stop()
+    with pytest.raises(SimStopped):
+        clock.charge_cpu_us(2)
