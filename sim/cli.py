@@ -335,7 +335,16 @@ def _run_contained(args, script) -> int:
         job = job_from_args(args, str(script))  # a start option naming part of the pose asks the world
     except (JobError, UnknownWorldError) as exc:
         raise SimCliError(str(exc)) from None
-    result, status = run_in_child(job, viewer=args.viewer, silent=args.json)
+    from openbricks_sim import shared_server
+
+    forker = shared_server.connect()  # a warm server of this installation, when one runs
+    try:
+        result, status = run_in_child(job, viewer=args.viewer, silent=args.json, forker=forker)
+    finally:
+        if forker is not None:
+            forker.close()
+        else:
+            shared_server.start_in_background()  # for the runs after this one
     if args.json:
         print(json.dumps(result.summary()))
     elif "limits" not in result.job:  # the child ended before it could report: say why here

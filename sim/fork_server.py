@@ -57,24 +57,20 @@ WARM_IMPORTS = (
 REQUEST_MAX_BYTES = 256 * 1024
 MAX_FDS = 8
 START_TIMEOUT_S = 60.0  # the server's own imports on a busy machine, before it forks the first child
+PUBLISHED_CHECK_S = 1.0  # how often a published server looks whether it is idle or replaced
 
 
 # --- the server -------------------------------------------------------------------------------------
 
 
-def serve(control_fd: int) -> int:
-    """The server's main loop: fork a child per request, report each one's end."""
-    # Interrupts are for the children (whoever asked for them forwards them); the server ends when
-    # its stdin closes (its requester is done) and its children have ended.
+def serve(control_fd: int, published=None) -> int:
+    """The server's main loop: fork a child per request, report each one's end.
+
+    A private server (ForkServer) ends when its stdin closes. A published one (shared_server.py:
+    `published` says whether its socket is still the one at its path) ends when it has been idle for
+    shared_server.IDLE_S or its socket was taken away, once its children have ended."""
+    # Interrupts are for the children (whoever asked for them forwards them).
     signal.signal(signal.SIGINT, signal.SIG_IGN)
-    for name in WARM_IMPORTS:
-        try:
-            importlib.import_module(name)
-        except Exception:  # noqa: BLE001 - a MuJoCo that does not load, a broken world file: each
-            pass  # child meets it again and reports it as its result
-    _warm_up()
-    gc.collect()
-    gc.freeze()
     control = socket.socket(fileno=control_fd)
     wake_read, wake_write = os.pipe()
     os.set_blocking(wake_read, False)
@@ -83,28 +79,53 @@ def serve(control_fd: int) -> int:
     signal.signal(signal.SIGCHLD, lambda *_: None)  # only to wake the loop
     children: dict[int, socket.socket] = {}
     accepting = True
+    watched = [control, wake_read] if published is not None else [control, 0, wake_read]
     while accepting or children:
-        readable, _, _ = select.select([control, 0, wake_read] if accepting else [wake_read], [], [])
+        timeout = None if published is None else PUBLISHED_CHECK_S
+        readable, _, _ = select.select(watched if accepting else [wake_read], [], [], timeout)
         if 0 in readable and not os.read(0, 4096):  # stdin closed: whoever started us is done
             accepting = False
-        elif control in readable:
-            try:
-                message, fds, _flags, _address = socket.recv_fds(control, REQUEST_MAX_BYTES, MAX_FDS)
-            except OSError:
-                message, fds = b"", []
-            if not message:
-                accepting = False
-            else:
-                pid, reply = _fork_request(message, fds)
-                if pid is not None:
-                    children[pid] = reply
+        elif control in readable and not _take_request(control, children):
+            accepting = published is not None  # a private server's requester closed its end
         if wake_read in readable:
             try:
                 os.read(wake_read, 4096)
             except BlockingIOError:
                 pass
         _reap(children)
+        if accepting and published is not None and not published(busy=bool(children) or bool(readable)):
+            # No new requester can reach us now; what was sent before that is still served.
+            while select.select([control], [], [], 0)[0] and _take_request(control, children):
+                pass
+            accepting = False
     return 0
+
+
+def _take_request(control: socket.socket, children: dict[int, socket.socket]) -> bool:
+    """Receive one request and fork its child; False if the socket gave nothing (its peer closed)."""
+    try:
+        message, fds, _flags, _address = socket.recv_fds(control, REQUEST_MAX_BYTES, MAX_FDS)
+    except OSError:
+        message, fds = b"", []
+    if not message:
+        return False
+    pid, reply = _fork_request(message, fds)
+    if pid is not None:
+        children[pid] = reply
+    return True
+
+
+def warm_up() -> None:
+    """Import what every target would import for itself, show a robot once, and freeze the result out
+    of the collector's reach (so children share the pages)."""
+    for name in WARM_IMPORTS:
+        try:
+            importlib.import_module(name)
+        except Exception:  # noqa: BLE001 - a MuJoCo that does not load, a broken world file: each
+            pass  # child meets it again and reports it as its result
+    _warm_up()
+    gc.collect()
+    gc.freeze()
 
 
 def _warm_up() -> None:
@@ -139,8 +160,11 @@ def _fork_request(message: bytes, fds: list[int]):
         stdin, stdout, stderr, *keep = passed
         if not can_fork():  # a thread of the warm-up that never ended: a fork could deadlock
             raise ForkServerError(f"the fork server runs {threading.active_count()} threads")
+        environment = request.get("env")
+        if environment is not None and not all(isinstance(v, str) for v in dict(environment).values()):
+            raise TypeError("env values must be strings")
         pid = fork_child(
-            functools.partial(_run_target, target, list(request["args"]), request.get("cwd")),
+            functools.partial(_run_target, target, list(request["args"]), request.get("cwd"), environment),
             stdin=stdin,
             stdout=stdout,
             stderr=stderr,
@@ -158,10 +182,17 @@ def _fork_request(message: bytes, fds: list[int]):
     return pid, reply
 
 
-def _run_target(target: str, args: list[str], cwd: str | None):
+def _run_target(target: str, args: list[str], cwd: str | None, environment: dict | None = None):
+    """In the child: the requester's working folder and (a shared server's) environment, then the target."""
     module_name, function = target.split(":")
     if cwd is not None:
         os.chdir(cwd)
+    if environment is not None:
+        os.environ.clear()
+        os.environ.update(environment)
+        tempfile = sys.modules.get("tempfile")
+        if tempfile is not None:
+            tempfile.tempdir = None  # found again from this TMPDIR, not the server's
     return getattr(importlib.import_module(module_name), function)(args)
 
 
@@ -189,32 +220,31 @@ def _send(reply: socket.socket, message: dict) -> None:
 # --- the client -------------------------------------------------------------------------------------
 
 
-class ForkServer:
-    """A fork server process and the requests sent to it (thread-safe)."""
+class ForkServerClient:
+    """Requests to a fork server over `control`, its datagram socket (thread-safe)."""
 
-    def __init__(self):
-        ours, theirs = socket.socketpair(socket.AF_UNIX, socket.SOCK_DGRAM)
-        try:
-            self.process = subprocess.Popen(
-                [sys.executable, "-m", "openbricks_sim.fork_server", str(theirs.fileno())],
-                stdin=subprocess.PIPE,  # its end closing (we are gone) ends the server
-                pass_fds=(theirs.fileno(),),
-                start_new_session=True,
-            )
-        finally:
-            theirs.close()
-        self.control = ours
+    def __init__(self, control: socket.socket, environment: dict | None = None, cwd: str | None = None):
+        self.control = control
+        # A shared server's children take on the requester's environment and folder (a request's own
+        # cwd wins); a private server's have its own, which are this process's.
+        self.environment = environment
+        self.cwd = cwd
         self._lock = threading.Lock()
+
+    def _check_alive(self) -> None:
+        pass
 
     def request(self, target: str, args: list[str], fds: list[int], cwd: str | None = None) -> socket.socket:
         """Send one request (fds: stdin, stdout, stderr, then those the child keeps, which are its 3, 4,
         ... there); the reply socket."""
         if target not in TARGETS:
             raise ForkServerError(f"unknown target {target!r}: one of {', '.join(TARGETS)}")
-        if self.process.poll() is not None:
-            raise ForkServerError(f"the fork server has ended (status {self.process.returncode})")
+        self._check_alive()
         ours, theirs = socket.socketpair()
-        message = json.dumps({"target": target, "args": args, "cwd": cwd}).encode()
+        request = {"target": target, "args": args, "cwd": cwd if cwd is not None else self.cwd}
+        if self.environment is not None:
+            request["env"] = self.environment
+        message = json.dumps(request).encode()
         try:
             with self._lock:
                 socket.send_fds(self.control, [message], [theirs.fileno(), *fds])
@@ -245,6 +275,37 @@ class ForkServer:
         return child
 
     def close(self) -> None:
+        self.control.close()
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+        return False
+
+
+class ForkServer(ForkServerClient):
+    """A private fork server process (it ends with this process) and the requests sent to it."""
+
+    def __init__(self):
+        ours, theirs = socket.socketpair(socket.AF_UNIX, socket.SOCK_DGRAM)
+        try:
+            self.process = subprocess.Popen(
+                [sys.executable, "-m", "openbricks_sim.fork_server", str(theirs.fileno())],
+                stdin=subprocess.PIPE,  # its end closing (we are gone) ends the server
+                pass_fds=(theirs.fileno(),),
+                start_new_session=True,
+            )
+        finally:
+            theirs.close()
+        super().__init__(ours)
+
+    def _check_alive(self) -> None:
+        if self.process.poll() is not None:
+            raise ForkServerError(f"the fork server has ended (status {self.process.returncode})")
+
+    def close(self) -> None:
         """No more requests: the server ends once its children have (it is killed if it does not)."""
         self.control.close()
         self.process.stdin.close()
@@ -253,13 +314,6 @@ class ForkServer:
         except subprocess.TimeoutExpired:
             self.process.kill()
             self.process.wait()
-
-    def __enter__(self):
-        return self
-
-    def __exit__(self, *exc):
-        self.close()
-        return False
 
 
 class WarmChild:
@@ -323,4 +377,9 @@ class WarmChild:
 
 
 if __name__ == "__main__":
+    if sys.argv[1] == "--publish":  # a shared server (shared_server.py): warm up, then publish the socket
+        from .shared_server import publish_and_serve
+
+        sys.exit(publish_and_serve(sys.argv[2]))
+    warm_up()
     sys.exit(serve(int(sys.argv[1])))

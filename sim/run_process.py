@@ -132,12 +132,13 @@ def _start_child(child_args, write_end, quiet, forker):
         stdio = {"stdin": devnull, "stdout": devnull if quiet else None, "stderr": devnull if quiet else None}
         args = [*child_args, "--result-fd", "3"]
         try:
-            if forker is None:
+            if forker is not None:
+                try:
+                    return forker.start("run", args, **stdio, pass_fds=(write_end,))
+                except ForkServerError:  # the server is gone: this child starts cold instead
+                    pass
+            if can_fork():
                 return fork_child(functools.partial(child_main, args), **stdio, extra_fds=(write_end,))
-            try:
-                return forker.start("run", args, **stdio, pass_fds=(write_end,))
-            except ForkServerError:  # the server is gone: this child starts cold instead
-                pass
         finally:
             os.close(devnull)
     return subprocess.Popen(

@@ -12,6 +12,9 @@ if signal.getsignal(signal.SIGINT) is signal.SIG_IGN:
 # A console running on this computer publishes itself in the runtime dir, and `openbricks` commands go
 # through it when they find it: the suite gets a runtime dir of its own, so its commands never do.
 os.environ["OPENBRICKS_RUNTIME_DIR"] = tempfile.mkdtemp(prefix="openbricks-test-run-")
+# `sim run` leaves a warm server behind for the runs after it (sim/shared_server.py): the suite's runs
+# start cold and leave nothing running; tests/sim/test_shared_server.py turns it on and stops it.
+os.environ["OPENBRICKS_SIM_WARM"] = "0"
 
 
 def pytest_collection_modifyitems(config, items):
