@@ -16,7 +16,8 @@ message each (JSON: target, args, cwd) carrying its descriptors (a stream socket
 the child's stdin, stdout, stderr and any it keeps); the reply stream says `{"pid": N}` once the
 child is forked and `{"exit": STATUS}` when the server has reaped it (negative: the signal that
 ended it). Closing the server's stdin (or ending the process that holds it) ends the server once its
-children have ended.
+children have ended. A server shared by a user's `sim run`s (shared_server.py) takes the same requests
+on a socket it publishes at a path, with the requester's environment in them.
 """
 
 from __future__ import annotations
