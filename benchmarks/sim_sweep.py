@@ -5,7 +5,8 @@ sim job costs before its program does anything.
   contained child process: interpreter start, imports, the world's build, the limits, the result
   back over a pipe). The median of a few runs, for the empty world and for the WRO table.
 - throughput: the same SEEDS seeds of a short drive across the WRO table (3 s simulated), on the
-  local pool with 2 workers (its children forked from one warm fork server), then on a Dask
+  local pool with 2 workers (its children forked from one warm fork server: its own, started
+  within the timed sweep, then the user's shared one that a `sim run` leaves running), then on a Dask
   LocalCluster of 2 worker processes on 127.0.0.1 (its start-up timed apart, as a standing cluster
   would not pay it per sweep);
 - the pool against one warm run at a time: WARM_RUNS seeds one after another from a warm fork server
@@ -18,7 +19,9 @@ not the engine, is often what moves them.
 
 from __future__ import annotations
 
+import contextlib
 import os
+import signal
 import statistics
 import tempfile
 import time
@@ -83,6 +86,40 @@ def _one_warm_run_per_minute(job) -> float:
         return WARM_RUNS / (time.perf_counter() - started) * 60
 
 
+@contextlib.contextmanager
+def _warm_runs(folder: str, on: bool):
+    """Sweeps in this block find the user's shared warm server (sim/shared_server.py) running, in a
+    runtime folder of the benchmark's own, or find none; the server is stopped after."""
+    from openbricks_sim import shared_server
+
+    saved = {
+        name: os.environ.get(name) for name in (shared_server.DISABLE_ENV, shared_server.RUNTIME_DIR_ENV)
+    }
+    os.environ[shared_server.RUNTIME_DIR_ENV] = os.path.join(folder, "runtime")
+    os.environ[shared_server.DISABLE_ENV] = "1" if on else "0"
+    path = None
+    try:
+        if on:
+            path = shared_server.socket_path()
+            shared_server.start_in_background()
+            deadline = time.monotonic() + 120
+            while (client := shared_server.connect()) is None:
+                if time.monotonic() > deadline:
+                    raise RuntimeError("the shared warm server did not start within 120 s")
+                time.sleep(0.05)
+            client.close()
+        yield
+    finally:
+        pid = shared_server.server_pid(path) if path else None
+        if pid is not None:
+            os.kill(pid, signal.SIGTERM)
+        for name, value in saved.items():
+            if value is None:
+                os.environ.pop(name, None)
+            else:
+                os.environ[name] = value
+
+
 def run() -> list[Row]:
     from distributed import LocalCluster
 
@@ -99,16 +136,25 @@ def run() -> list[Row]:
         job = SimJob(program, world="wro", limit_ms=10_000)
         warm_rate = _one_warm_run_per_minute(job)
         rows.append(Row("one warm run at a time", warm_rate, "seeds/min", f"{WARM_RUNS} seeds; {_load()}"))
-        pool = _seeds_per_minute(f"local pool, {WORKERS} workers", job, workers=WORKERS)
-        rows.append(pool)
+        with _warm_runs(folder, on=False):
+            pool = _seeds_per_minute(f"local pool, {WORKERS} workers", job, workers=WORKERS)
         rows.append(
-            Row(
-                f"pool / ({WORKERS} x one warm run)",
-                pool.value / (WORKERS * warm_rate),
-                "x",
-                "how busy the sweep keeps the cores; bar: >= 0.9",
-            )
+            Row(pool.case, pool.value, pool.unit, f"its own fork server, started meanwhile; {pool.note}")
         )
+        with _warm_runs(folder, on=True):
+            warm_pool = _seeds_per_minute(
+                f"local pool, {WORKERS} workers, the user's warm server running", job, workers=WORKERS
+            )
+        rows.append(warm_pool)
+        for case, measured in (("", pool), (", warm server", warm_pool)):
+            rows.append(
+                Row(
+                    f"pool{case} / ({WORKERS} x one warm run)",
+                    measured.value / (WORKERS * warm_rate),
+                    "x",
+                    "how busy the sweep keeps the cores; bar: >= 0.9",
+                )
+            )
         started = time.perf_counter()
         with LocalCluster(
             n_workers=WORKERS, threads_per_worker=1, processes=True, host="127.0.0.1", dashboard_address=None

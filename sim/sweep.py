@@ -161,10 +161,14 @@ def sweep(
 
 def _on_pool(workers: int, jobs: dict, source: str) -> Iterator[SeedRow]:
     """Threads that each mind one contained child at a time, forked from one warm fork server (the
-    imports paid once, not once per seed) where the OS can fork. Abandoned (Ctrl-C, a stopped job),
-    seeds not started are dropped and running ones stopped, so nothing outlives the sweep."""
+    imports paid once, not once per seed) where the OS can fork: the user's shared one if it runs
+    (shared_server.py; a `sim run` left it), else one of the sweep's own, started meanwhile. Abandoned
+    (Ctrl-C, a stopped job), seeds not started are dropped and running ones stopped, so no seed
+    outlives the sweep."""
+    from . import shared_server
+
     stop = threading.Event()
-    forker = ForkServer() if hasattr(os, "fork") else None
+    forker = shared_server.connect() or (ForkServer() if hasattr(os, "fork") else None)
     pool = ThreadPoolExecutor(max_workers=workers, thread_name_prefix="sweep")
     try:
         futures = {pool.submit(run_seed, job, source, stop, forker): seed for seed, job in jobs.items()}
@@ -174,7 +178,7 @@ def _on_pool(workers: int, jobs: dict, source: str) -> Iterator[SeedRow]:
         stop.set()
         pool.shutdown(wait=True, cancel_futures=True)
         if forker is not None:
-            forker.close()
+            forker.close()  # a private server ends with it; the shared one stays for the runs after
 
 
 def _on_dask(address: str, jobs: dict, source: str, template: SimJob) -> Iterator[SeedRow]:

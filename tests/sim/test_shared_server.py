@@ -1,6 +1,6 @@
 """`openbricks sim run` and the shared warm server (sim/shared_server.py): the first run starts it, the
-runs after it are its children (in the command's folder, on its streams, fenced as any child), and it
-ends when its socket is taken away; a folder others may enter gets no server at all."""
+runs and sweeps after it are its children (in the command's folder, on its streams, fenced as any
+child), and it ends when its socket is taken away; a folder others may enter gets no server at all."""
 
 import json
 import os
@@ -13,6 +13,8 @@ from pathlib import Path
 import pytest
 
 from openbricks_sim import shared_server
+from openbricks_sim.job import SimJob
+from openbricks_sim.sweep import sweep
 
 SERVER_START_S = 90  # its imports and one 3D view, on a busy machine
 CLI = [sys.executable, "-m", "openbricks_server.cli", "sim", "run"]
@@ -70,7 +72,7 @@ def _published(runtime: Path) -> Path:
 
 
 @pytest.mark.e2e
-def test_the_first_run_starts_the_server_and_the_next_run_is_its_child(warm, tmp_path):
+def test_the_first_run_starts_the_server_and_the_next_runs_are_its_children(warm, tmp_path, monkeypatch):
     (tmp_path / "drive.py").write_text(
         "from openbricks.drivers.st3032 import ST3032Motor\n"
         "from openbricks.robotics import DriveBase\n"
@@ -94,6 +96,13 @@ def test_the_first_run_starts_the_server_and_the_next_run_is_its_child(warm, tmp
     (tmp_path / "escape.py").write_text("import subprocess\n", encoding="utf-8")
     fenced_done, fenced = _sim_run(warm, tmp_path, "escape.py")
     assert fenced_done.returncode != 0 and "subprocess" in fenced["error"]
+
+    # A sweep finds it too: its seeds are the server's children.
+    for name in ("OPENBRICKS_SIM_WARM", "OPENBRICKS_RUNTIME_DIR"):
+        monkeypatch.setenv(name, warm[name])
+    rows = list(sweep(SimJob(str(tmp_path / "drive.py")), [1, 2]))
+    assert [row.result.output for row in rows] == ["drove\n", "drove\n"]
+    assert all(row.result.build_s < cold["build_s"] / 2 for row in rows)
 
     # Its socket taken away, the server ends.
     pid = shared_server.server_pid(str(socket_file))
