@@ -212,14 +212,12 @@ def run_ours(
 
 def _servers(runtime: Path | None) -> list[int]:
     """Pids of the warm servers published in `runtime` (their lock files name them)."""
+    from openbricks_sim.shared_server import server_pid
+
     if runtime is None:
         return []
-    pids = []
-    for lock in (runtime / "sim").glob("*.lock"):
-        text = lock.read_text(encoding="ascii").strip()
-        if text.isdigit() and os.path.exists(f"/proc/{text}"):
-            pids.append(int(text))
-    return pids
+    pids = (server_pid(str(socket)) for socket in (runtime / "sim").glob("*.sock"))
+    return [pid for pid in pids if pid is not None and os.path.exists(f"/proc/{pid}")]
 
 
 def start_warm_server(runtime: Path, folder: Path) -> int:
